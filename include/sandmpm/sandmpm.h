@@ -1,0 +1,348 @@
+/*
+ * sandmpm — dry sand with the Material Point Method and Drucker–Prager elastoplasticity.
+ *
+ * The public API of libsandmpm. The method is Klár 2016, "Simulation of Granular Media with the
+ * Material Point Method" (thesis, Chapters 2–3, Appendix B); section and equation numbers in the
+ * comments refer to it.
+ *
+ * Conventions: SI units (m, s, kg, Pa), y up, gravity (0, -9.81, 0) by default. Vectors are
+ * always passed as 3 components; in 2D the z component is ignored (and reported as 0).
+ * Matrices are row-major. The library never prints and never exits; every call that can fail
+ * returns an sm_status and leaves a message in sm_world_errmsg().
+ *
+ * Typical use:
+ *   sm_world_def def = sm_world_def_default();
+ *   def.dim = 3; def.dx = 0.02; ...
+ *   sm_world *w; if (sm_world_create(&def, &w) != SM_OK) ...
+ *   int sand = sm_world_add_material(w, &mat);           // mat = sm_material_def_sand()
+ *   sm_world_seed_shape(w, &shape, &seed);               // particles
+ *   sm_world_add_collider(w, &collider);                 // ground, containers, tools
+ *   while (...) sm_world_advance(w, frame_end_time);     // adaptive steps, lands on frame_end_time
+ *   sm_world_destroy(w);
+ */
+#ifndef SANDMPM_H
+#define SANDMPM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sandmpm/config.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Scalar type of the simulation state, chosen at build time (CMake option SM_DOUBLE). */
+#if SM_DOUBLE
+typedef double sm_real;
+#else
+typedef float sm_real;
+#endif
+
+/** Status codes. The numeric values match the command line's exit codes where they overlap. */
+typedef enum sm_status {
+    SM_OK = 0,
+    SM_ERR_INVALID = 2,   /**< bad input: a definition out of range, an unknown id, ... */
+    SM_ERR_NUMERICAL = 3, /**< NaN/Inf or other numerical failure; the step was stopped */
+    SM_ERR_IO = 4,        /**< not used by the library itself; reserved for I/O layers */
+    SM_ERR_NOMEM = 5      /**< an allocation failed */
+} sm_status;
+
+/** Short name of a status ("ok", "invalid input", ...). Never NULL. */
+const char *sm_status_string(sm_status s);
+
+/** Library version, "MAJOR.MINOR.PATCH". */
+const char *sm_version(void);
+
+/** 1 if sm_real is double, 0 if float. */
+int sm_real_is_double(void);
+
+/* ------------------------------------------------------------------------------------------ */
+/* World                                                                                        */
+
+/** B-spline interpolation kernel (thesis §3.4.3; the support-3 one is the quadratic). */
+typedef enum sm_kernel {
+    SM_KERNEL_QUADRATIC = 0, /**< support 3 nodes per axis, APIC D = dx^2/4 */
+    SM_KERNEL_CUBIC = 1      /**< support 4 nodes per axis, APIC D = dx^2/3 */
+} sm_kernel;
+
+/** Particle/grid transfer scheme (thesis §3.6.1, §3.6.4). */
+typedef enum sm_transfer {
+    SM_TRANSFER_APIC = 0, /**< affine particle-in-cell (default) */
+    SM_TRANSFER_PIC = 1,  /**< plain PIC: dissipative */
+    SM_TRANSFER_FLIP = 2  /**< FLIP/PIC blend with flip_ratio */
+} sm_transfer;
+
+/** Time integrator of the grid velocities. */
+typedef enum sm_integrator {
+    SM_INTEGRATOR_EXPLICIT = 0, /**< symplectic Euler (Algorithm 3) */
+    SM_INTEGRATOR_IMPLICIT = 1  /**< Newton–GMRES (Algorithm 5); not yet available */
+} sm_integrator;
+
+/** Collision behaviour of a collider or the domain walls (thesis §3.6.3, Algorithm 7). */
+typedef enum sm_collide_mode {
+    SM_COLLIDE_STICKY = 0,  /**< no-slip: grid nodes inside take the collider's velocity */
+    SM_COLLIDE_SLIP = 1,    /**< nodes inside keep their depth, slide tangentially */
+    SM_COLLIDE_SEPARATE = 2 /**< nodes may leave the surface but not penetrate (or go deeper) */
+} sm_collide_mode;
+
+/** Everything fixed at world creation. Get defaults from sm_world_def_default(). */
+typedef struct sm_world_def {
+    int dim;                 /**< 2 or 3. Default 3. */
+    double dx;               /**< grid spacing, m. Default 0.02. */
+    double domain_min[3];    /**< lower corner of the simulated box, m. Default (0,0,0). */
+    double domain_max[3];    /**< upper corner, m. Default (1,1,1). Rounded up to whole cells. */
+    double gravity[3];       /**< m/s^2. Default (0,-9.81,0). */
+    sm_kernel kernel;        /**< default SM_KERNEL_QUADRATIC */
+    sm_transfer transfer;    /**< default SM_TRANSFER_APIC */
+    double flip_ratio;       /**< FLIP share in [0,1] for SM_TRANSFER_FLIP (3.111). Default 0.95. */
+    sm_integrator integrator;/**< default SM_INTEGRATOR_EXPLICIT */
+    double cfl;              /**< CFL number in (0,1]: no particle moves more than cfl*dx per step. Default 1 (thesis). */
+    double max_dt;           /**< largest time step, s. Default 1e-3. */
+    double elastic_cfl;      /**< factor on the elastic-wave bound dt <= elastic_cfl*dx/c, c = sqrt((lambda+2mu)/rho). Default 0.5. 0 disables it. */
+    sm_collide_mode wall_mode;/**< behaviour of the domain walls. Default SM_COLLIDE_SEPARATE. */
+    double wall_friction;    /**< Coulomb coefficient of the domain walls. Default 0. */
+    int threads;             /**< OpenMP threads; 0 = OpenMP's default. Results do not depend on it. */
+    size_t max_particles;    /**< refuse to grow beyond this many particles; 0 = no limit. */
+} sm_world_def;
+
+/** Defaults as documented on each field. */
+sm_world_def sm_world_def_default(void);
+
+typedef struct sm_world sm_world;
+
+/** Creates a world. On failure *out is NULL and the status says why (no message object exists
+ *  yet, so the reason is also written to err, if err is not NULL, up to errlen bytes). */
+sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, size_t errlen);
+
+/** Destroys a world. Accepts NULL. */
+void sm_world_destroy(sm_world *w);
+
+/** The message of the last failed call on this world ("" if none). */
+const char *sm_world_errmsg(const sm_world *w);
+
+/** Changes the number of threads used by later steps (0 = OpenMP's default). */
+void sm_world_set_threads(sm_world *w, int threads);
+
+/** The definition the world was created with (domain rounded to whole cells). */
+const sm_world_def *sm_world_get_def(const sm_world *w);
+
+/** Grid nodes per axis (x, y, z; z = 1 in 2D). */
+void sm_world_grid_size(const sm_world *w, int n[3]);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Materials                                                                                    */
+
+typedef enum sm_material_kind {
+    SM_MATERIAL_SAND = 0,   /**< Hencky St. Venant–Kirchhoff + Drucker–Prager plasticity */
+    SM_MATERIAL_ELASTIC = 1 /**< the same energy, no plasticity */
+} sm_material_kind;
+
+/** A material. Angles are in degrees, as in the thesis's Table 4.2. */
+typedef struct sm_material_def {
+    sm_material_kind kind;
+    double density;          /**< rho, kg/m^3 (> 0) */
+    double youngs_modulus;   /**< E, Pa (> 0) */
+    double poisson_ratio;    /**< nu, in (-1, 0.5) */
+    int hardening;           /**< sand: 1 = hardening with h0..h3 (3.78-3.80); 0 = fixed friction_angle */
+    double friction_angle;   /**< sand without hardening: phi_F in degrees, [0, 90) */
+    double h0, h1, h2, h3;   /**< hardening: phi_F = h0 + (h1 q - h3) exp(-h2 q); h0,h1,h3 degrees, h2 dimensionless */
+} sm_material_def;
+
+/** Sand as in most thesis scenes: rho 2200, E 3.537e5, nu 0.3, hardening 35/9/0.2/10. */
+sm_material_def sm_material_def_sand(void);
+/** An elastic solid: rho 1000, E 1e5, nu 0.3. */
+sm_material_def sm_material_def_elastic(void);
+
+/** Adds a material; returns its id (>= 0) or -1 with a message on bad input. */
+int sm_world_add_material(sm_world *w, const sm_material_def *m);
+
+/** Friction angle in degrees for hardening state q (3.79). */
+double sm_hardening_friction_angle(const sm_material_def *m, double q);
+/** Drucker–Prager alpha for a friction angle in degrees (3.80): sqrt(2/3) 2 sin(phi)/(3 - sin(phi)). */
+double sm_alpha_from_friction_angle(double degrees);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Shapes: signed distance functions, negative inside.                                          */
+
+typedef enum sm_shape_kind {
+    SM_SHAPE_HALFSPACE = 0, /**< solid below the plane through `center` with outward `normal` */
+    SM_SHAPE_BOX = 1,       /**< box with `half_extent`, rotated by `rotation` about `center` */
+    SM_SHAPE_SPHERE = 2,    /**< ball (disk in 2D) of `radius` */
+    SM_SHAPE_CYLINDER = 3   /**< capped cylinder of `radius`, axis = local y, `half_height` */
+} sm_shape_kind;
+
+/** A primitive shape. In 2D, z components are ignored and rotation is about z only. */
+typedef struct sm_shape {
+    sm_shape_kind kind;
+    double center[3];       /**< m: a point on the plane, or the centre of the shape */
+    double normal[3];       /**< half-space outward normal (need not be unit) */
+    double half_extent[3];  /**< box half sizes, m */
+    double radius;          /**< sphere, cylinder, m */
+    double half_height;     /**< cylinder half length along its axis, m */
+    double rotation[4];     /**< unit quaternion (w,x,y,z): local -> shape frame. Default identity. */
+    int inside_out;         /**< 1: the complement (a container: solid outside, free inside) */
+} sm_shape;
+
+/** A shape with identity rotation and everything else zero. */
+sm_shape sm_shape_default(sm_shape_kind kind);
+
+/** Signed distance of a shape at point x (3 components), with its unit gradient if grad != NULL. */
+double sm_shape_distance(const sm_shape *s, int dim, const double x[3], double grad[3]);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Particles                                                                                    */
+
+typedef enum sm_seed_method {
+    SM_SEED_JITTERED = 0, /**< a lattice of ppc points per cell, each moved randomly within its sub-cell */
+    SM_SEED_POISSON = 1   /**< Poisson disk (Bridson) with a radius giving about ppc per cell */
+} sm_seed_method;
+
+/** How to fill a shape with particles. */
+typedef struct sm_seed_def {
+    int material;           /**< id from sm_world_add_material */
+    double ppc;             /**< particles per cell (> 0); V0 = dx^d/ppc, mass = rho V0 */
+    sm_seed_method method;  /**< default SM_SEED_JITTERED */
+    uint64_t seed;          /**< RNG seed: same seed, same particles */
+    double velocity[3];     /**< initial velocity, m/s */
+    double angular_velocity[3]; /**< initial spin about the shape's seeding centroid, rad/s */
+    const sm_shape *clip;   /**< optional second shape: only points inside both are kept */
+} sm_seed_def;
+
+sm_seed_def sm_seed_def_default(void);
+
+/** Fills a shape (its interior, clipped to the domain) with particles. Returns the number added
+ *  in *added (if not NULL). A half-space or inside-out shape fills the whole domain part it covers. */
+sm_status sm_world_seed_shape(sm_world *w, const sm_shape *shape, const sm_seed_def *seed, size_t *added);
+
+/** Adds n particles at given positions (3n values) with given velocities (3n values, or NULL for
+ *  rest), undeformed, each with volume V0 = dx^d/ppc. Used by emitters and tests. */
+sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions, const double *velocities,
+                                 int material, double ppc);
+
+/** Read-only view of the particle arrays (structure of arrays, n particles, d = dim). */
+typedef struct sm_particles_view {
+    size_t n;
+    int dim;
+    const sm_real *x;     /**< positions, n*d */
+    const sm_real *v;     /**< velocities, n*d */
+    const sm_real *B;     /**< APIC affine momentum matrices, n*d*d, row-major */
+    const sm_real *F;     /**< elastic deformation gradients F^E, n*d*d, row-major */
+    const sm_real *mass;  /**< kg, n */
+    const sm_real *vol0;  /**< initial volume V0, n */
+    const sm_real *q;     /**< hardening state, n */
+    const sm_real *alpha; /**< Drucker–Prager alpha, n */
+    const uint16_t *material; /**< material id, n */
+} sm_particles_view;
+
+void sm_world_particles(const sm_world *w, sm_particles_view *out);
+
+/** Writable velocity access (e.g. to give an object a kick); n*d values. */
+sm_real *sm_world_particle_velocities(sm_world *w);
+
+/** Friction angle in degrees of particle i (from its material and q). */
+double sm_world_particle_friction_angle(const sm_world *w, size_t i);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Colliders                                                                                    */
+
+#define SM_MAX_COLLIDER_SHAPES 16
+
+/** Rigid pose of a collider at a time: position of its origin and orientation. */
+typedef struct sm_pose {
+    double position[3];     /**< m */
+    double rotation[4];     /**< unit quaternion (w,x,y,z) */
+} sm_pose;
+
+/** Scripted motion: fills the pose at time t. Called once per step per collider (never per node). */
+typedef void (*sm_motion_fn)(void *user, double t, sm_pose *pose);
+
+/** A rigid collider: a union of shapes in its own frame, or the complement of that union. */
+typedef struct sm_collider_def {
+    int shape_count;                          /**< 1..SM_MAX_COLLIDER_SHAPES */
+    sm_shape shapes[SM_MAX_COLLIDER_SHAPES];  /**< in the collider's frame */
+    int inside_out;                           /**< 1: complement of the union (a container) */
+    sm_collide_mode mode;
+    double friction;                          /**< Coulomb coefficient mu >= 0 */
+    sm_pose pose;                             /**< pose at t = 0 (identity = shapes as given) */
+    double velocity[3];                       /**< constant linear velocity of the origin, m/s */
+    double angular_velocity[3];               /**< constant angular velocity about the origin, rad/s */
+    sm_motion_fn motion;                      /**< if set, overrides velocity/angular_velocity */
+    void *motion_user;
+} sm_collider_def;
+
+sm_collider_def sm_collider_def_default(void);
+
+/** Adds a collider; returns its id (>= 0) or -1 with a message. */
+int sm_world_add_collider(sm_world *w, const sm_collider_def *c);
+
+/** Signed distance of collider id at point x at the current time (gradient optional). */
+double sm_world_collider_distance(const sm_world *w, int id, const double x[3], double grad[3]);
+
+/** Current pose of collider id. */
+void sm_world_collider_pose(const sm_world *w, int id, sm_pose *pose);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Time stepping                                                                                */
+
+/** Stages of one step, timed into sm_diagnostics.stage_seconds. */
+typedef enum sm_stage {
+    SM_STAGE_DT = 0,
+    SM_STAGE_SORT,
+    SM_STAGE_P2G,
+    SM_STAGE_GRID,
+    SM_STAGE_COLLIDE,
+    SM_STAGE_G2P,
+    SM_STAGE_PLASTICITY,
+    SM_STAGE_COUNT
+} sm_stage;
+
+/** Name of a stage ("p2g", ...). */
+const char *sm_stage_name(sm_stage s);
+
+/** The next time step the world would take, capped so it does not pass t_end (s). */
+double sm_world_next_dt(sm_world *w, double t_end);
+
+/** One step of size dt (> 0, s). Returns SM_ERR_NUMERICAL with a message naming the step and
+ *  particle if the state becomes NaN/Inf; the state is then the last good one. */
+sm_status sm_world_step(sm_world *w, double dt);
+
+/** Adaptive steps until the world's time equals t_end exactly. */
+sm_status sm_world_advance(sm_world *w, double t_end);
+
+/** Simulated time, s. */
+double sm_world_time(const sm_world *w);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Diagnostics                                                                                  */
+
+typedef struct sm_diagnostics {
+    size_t particles;
+    double total_mass;            /**< kg */
+    double momentum[3];           /**< kg m/s */
+    double angular_momentum[3];   /**< about the origin, kg m^2/s; APIC includes the B term. In 2D only z. */
+    double kinetic_energy;        /**< J, (1/2) sum m v^2 */
+    double elastic_energy;        /**< J, sum V0 psi(F^E) */
+    double max_speed;             /**< m/s */
+    double center_of_mass[3];     /**< m */
+    uint64_t steps;               /**< steps taken since creation */
+    double time;                  /**< s */
+    double last_dt;               /**< s */
+    double min_dt, max_dt;        /**< smallest and largest step since the last sm_world_reset_step_stats */
+    double stage_seconds[SM_STAGE_COUNT]; /**< wall time per stage since creation */
+    uint64_t clamped_particles;   /**< particles pushed back inside the domain by the safety clamp */
+} sm_diagnostics;
+
+/** Computes the diagnostics (O(n)). */
+void sm_world_diagnostics(const sm_world *w, sm_diagnostics *out);
+
+/** Resets min_dt/max_dt tracking (e.g. at each frame). */
+void sm_world_reset_step_stats(sm_world *w);
+
+/** A 64-bit hash of all particle state (bitwise), for determinism checks. */
+uint64_t sm_world_state_hash(const sm_world *w);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,70 @@
+/* Level-set colliders (thesis §3.6.3, Algorithm 7).
+ *
+ * A collider is a union of analytic signed-distance shapes (half-space, box, sphere, capped
+ * cylinder; each optionally inside-out), optionally complemented as a whole, moving rigidly.
+ * phi < 0 is inside the solid. Collision acts on grid node velocities, never on particles.
+ *
+ * Per step the world calls sm_collider_begin_step (pose at t^n and t^{n+1}, rigid velocity over
+ * the step), then for every grid node with mass sm_collide_node (GRID_COLLISIONS: sticky / slip /
+ * separate projection of v* -> v-bar, recording contacts) and sm_friction_node (FRICTION: Coulomb
+ * friction from the collision impulse, relative to the collider's velocity -> v-tilde), then
+ * sm_collider_end_step. Everything here is in double; grid values are converted at the call. */
+#ifndef SM_COLLIDE_H
+#define SM_COLLIDE_H
+
+#include "core/common.h"
+
+typedef struct sm_collider {
+    sm_collider_def def;   /* copy of the definition (shapes in the collider's frame) */
+    double t0, dt;         /* current step: [t0, t0 + dt] */
+    sm_pose pose0, pose1;  /* pose at t^n and t^{n+1} */
+    double R0[9], R1[9];   /* rotation matrices of pose0, pose1 (row-major, local -> world) */
+    double v[3];           /* linear velocity of the origin over the step, m/s */
+    double w[3];           /* angular velocity over the step, rad/s (world frame) */
+} sm_collider;
+
+/* Copies the definition, sets pose0 = pose1 = def->pose, velocities from the def. */
+void sm_collider_init(sm_collider *c, const sm_collider_def *def);
+
+/* Prepares the step [t0, t0+dt]: pose1 from def->motion(t0+dt) if set, else by integrating the
+ * constant linear/angular velocity exactly (rotation by the quaternion exponential); v and w are
+ * the rigid velocity that carries pose0 to pose1 in dt (for a motion function: finite difference). */
+void sm_collider_begin_step(sm_collider *c, double t0, double dt);
+
+/* pose0 <- pose1 (call after the step is accepted). */
+void sm_collider_end_step(sm_collider *c);
+
+/* Signed distance at x for pose `which` (0 = t^n, 1 = t^{n+1}); unit gradient in grad if not NULL.
+ * In 2D (dim == 2) only x, y are used and grad[2] = 0. */
+double sm_collider_phi(const sm_collider *c, int dim, int which, const double x[3], double grad[3]);
+
+/* Velocity of the collider's material at world point x (rigid: v + w x (x - origin1)). */
+void sm_collider_velocity(const sm_collider *c, int dim, const double x[3], double vel[3]);
+
+#define SM_MAX_NODE_CONTACTS 4
+
+/* What GRID_COLLISIONS recorded for one node: needed by FRICTION and by the implicit solver
+ * (PRUNE_COLLISIONS). */
+typedef struct sm_node_contact {
+    int sticky;                               /* collider index that stuck this node, or -1 */
+    int count;                                /* recorded slip/separate collisions */
+    int body[SM_MAX_NODE_CONTACTS];           /* collider index of each */
+    double n[SM_MAX_NODE_CONTACTS][3];        /* normal (grad phi at x-hat) of each */
+} sm_node_contact;
+
+/* GRID_COLLISIONS for one node at position xi (3 comps) with velocity v (in: v*, out: v-bar),
+ * over all nc colliders in order, as Algorithm 7. rec receives the contacts (always written). */
+void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3], double dt,
+                     double v[3], sm_node_contact *rec);
+
+/* FRICTION for one node: v (in: v-bar, out: v-tilde); dv = v-bar - v* is the collision impulse per
+ * unit mass. For each recorded slip/separate collision b with normal n, relative velocity
+ * vr = v - v_b, tangential part vt = vr - n (n . vr): v -= min(|vt|, mu_b |dv|) vt/|vt|.
+ * Sticky nodes are unchanged. */
+void sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const sm_node_contact *rec,
+                      const double dv[3], double v[3]);
+
+/* Rotation matrix (row-major) of a unit quaternion (w,x,y,z). */
+void sm_quat_to_mat(const double q[4], double R[9]);
+
+#endif

@@ -1,0 +1,63 @@
+/* Minimal test harness: CHECK macros that count, print failures with file:line, and a summary.
+ * Each test program returns non-zero if any check failed. */
+#ifndef SM_TEST_UTIL_H
+#define SM_TEST_UTIL_H
+
+#include <math.h>
+#include <stdio.h>
+
+static int sm_test_checks = 0, sm_test_failures = 0;
+
+#define CHECK(cond)                                                                          \
+    do {                                                                                     \
+        sm_test_checks++;                                                                    \
+        if (!(cond)) {                                                                       \
+            sm_test_failures++;                                                              \
+            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond);       \
+        }                                                                                    \
+    } while (0)
+
+/* |a - b| <= tol, printing both on failure. */
+#define CHECK_NEAR(a, b, tol)                                                                \
+    do {                                                                                     \
+        double sm_a_ = (double)(a), sm_b_ = (double)(b), sm_t_ = (double)(tol);              \
+        sm_test_checks++;                                                                    \
+        if (!(fabs(sm_a_ - sm_b_) <= sm_t_)) {                                               \
+            sm_test_failures++;                                                              \
+            fprintf(stderr, "%s:%d: CHECK_NEAR failed: %s = %.17g, %s = %.17g, |diff| = %.3g > %.3g\n", \
+                    __FILE__, __LINE__, #a, sm_a_, #b, sm_b_, fabs(sm_a_ - sm_b_), sm_t_);   \
+        }                                                                                    \
+    } while (0)
+
+/* |a - b| <= rtol * max(|a|, |b|, floor). */
+#define CHECK_REL(a, b, rtol, floor_)                                                        \
+    do {                                                                                     \
+        double sm_a_ = (double)(a), sm_b_ = (double)(b);                                     \
+        double sm_s_ = fmax(fmax(fabs(sm_a_), fabs(sm_b_)), (double)(floor_));               \
+        sm_test_checks++;                                                                    \
+        if (!(fabs(sm_a_ - sm_b_) <= (double)(rtol) * sm_s_)) {                              \
+            sm_test_failures++;                                                              \
+            fprintf(stderr, "%s:%d: CHECK_REL failed: %s = %.17g, %s = %.17g, rel = %.3g > %.3g\n", \
+                    __FILE__, __LINE__, #a, sm_a_, #b, sm_b_, fabs(sm_a_ - sm_b_) / sm_s_,   \
+                    (double)(rtol));                                                         \
+        }                                                                                    \
+    } while (0)
+
+static inline int sm_test_summary(const char *name) {
+    printf("%s: %d checks, %d failed\n", name, sm_test_checks, sm_test_failures);
+    return sm_test_failures ? 1 : 0;
+}
+
+/* Deterministic RNG for tests (splitmix64). */
+static inline unsigned long long sm_test_rng_next(unsigned long long *s) {
+    unsigned long long z = (*s += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+}
+/* Uniform in [lo, hi). */
+static inline double sm_test_uniform(unsigned long long *s, double lo, double hi) {
+    return lo + (hi - lo) * (double)(sm_test_rng_next(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+#endif

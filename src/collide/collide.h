@@ -23,7 +23,8 @@ typedef struct sm_collider {
     double w[3];           /* angular velocity over the step, rad/s (world frame) */
 } sm_collider;
 
-/* Copies the definition, sets pose0 = pose1 = def->pose, velocities from the def. */
+/* Copies the definition, sets pose0 = pose1 = def->pose (or motion(user, 0) if a motion function
+ * is set), velocities from the def. */
 void sm_collider_init(sm_collider *c, const sm_collider_def *def);
 
 /* Prepares the step [t0, t0+dt]: pose1 from def->motion(t0+dt) if set, else by integrating the
@@ -31,7 +32,7 @@ void sm_collider_init(sm_collider *c, const sm_collider_def *def);
  * the rigid velocity that carries pose0 to pose1 in dt (for a motion function: finite difference). */
 void sm_collider_begin_step(sm_collider *c, double t0, double dt);
 
-/* pose0 <- pose1 (call after the step is accepted). */
+/* pose0 <- pose1, t0 <- t0 + dt (call after the step is accepted). */
 void sm_collider_end_step(sm_collider *c);
 
 /* Signed distance at x for pose `which` (0 = t^n, 1 = t^{n+1}); unit gradient in grad if not NULL.

@@ -1,0 +1,697 @@
+/* The world: creation, materials, particles, colliders, the step driver and diagnostics.
+ *
+ * One step (thesis Algorithm 1, DESIGN §3), each stage timed:
+ *   dt (chosen by the caller through sm_world_next_dt / sm_world_advance: min of max_dt,
+ *   CFL dx / max particle speed, elastic_cfl dx / wave speed, landing exactly on the target time),
+ *   sort (bin by grid block), P2G (with force), grid update + collisions + friction, G2P,
+ *   plasticity and hardening (which also prepares the next step's stress). */
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "core/hash.h"
+#include "core/timer.h"
+#include "material/material.h"
+#include "world_internal.h"
+
+const char *sm_status_string(sm_status s) {
+    switch (s) {
+    case SM_OK: return "ok";
+    case SM_ERR_INVALID: return "invalid input";
+    case SM_ERR_NUMERICAL: return "numerical failure";
+    case SM_ERR_IO: return "I/O failure";
+    case SM_ERR_NOMEM: return "out of memory";
+    }
+    return "unknown status";
+}
+
+const char *sm_version(void) { return SM_VERSION_STRING; }
+int sm_real_is_double(void) { return SM_DOUBLE; }
+
+const char *sm_stage_name(sm_stage s) {
+    static const char *names[SM_STAGE_COUNT] = {"dt", "sort", "p2g", "grid", "collide", "g2p", "plasticity"};
+    return (s >= 0 && s < SM_STAGE_COUNT) ? names[s] : "?";
+}
+
+sm_status sm_world_fail(sm_world *w, sm_status status, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(w->err, sizeof w->err, fmt, ap);
+    va_end(ap);
+    return status;
+}
+
+const char *sm_world_errmsg(const sm_world *w) { return w ? w->err : "no world"; }
+
+sm_world_def sm_world_def_default(void) {
+    sm_world_def d;
+    memset(&d, 0, sizeof d);
+    d.dim = 3;
+    d.dx = 0.02;
+    for (int a = 0; a < 3; a++) {
+        d.domain_min[a] = 0;
+        d.domain_max[a] = 1;
+    }
+    d.gravity[1] = -9.81;
+    d.kernel = SM_KERNEL_QUADRATIC;
+    d.transfer = SM_TRANSFER_APIC;
+    d.flip_ratio = 0.95;
+    d.integrator = SM_INTEGRATOR_EXPLICIT;
+    d.cfl = 1.0;
+    d.max_dt = 1e-3;
+    d.elastic_cfl = 0.5;
+    d.wall_mode = SM_COLLIDE_SEPARATE;
+    d.wall_friction = 0;
+    d.threads = 0;
+    d.max_particles = 0;
+    return d;
+}
+
+static int finite3(const double v[3]) { return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
+
+static int resolve_threads(int t) {
+#ifdef _OPENMP
+    if (t <= 0) t = omp_get_max_threads();
+#else
+    t = 1;
+#endif
+    return t < 1 ? 1 : t;
+}
+
+sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, size_t errlen) {
+    char msg[256] = "";
+    *out = NULL;
+    if (!def) snprintf(msg, sizeof msg, "world definition is NULL");
+    else if (def->dim != 2 && def->dim != 3) snprintf(msg, sizeof msg, "dim: must be 2 or 3, got %d", def->dim);
+    else if (!(def->dx > 0) || !isfinite(def->dx)) snprintf(msg, sizeof msg, "dx: must be > 0, got %g", def->dx);
+    else if (!finite3(def->domain_min) || !finite3(def->domain_max)) snprintf(msg, sizeof msg, "domain: must be finite");
+    else if (!finite3(def->gravity)) snprintf(msg, sizeof msg, "gravity: must be finite");
+    else if (def->kernel != SM_KERNEL_QUADRATIC && def->kernel != SM_KERNEL_CUBIC) snprintf(msg, sizeof msg, "kernel: unknown value %d", (int)def->kernel);
+    else if (def->transfer != SM_TRANSFER_APIC && def->transfer != SM_TRANSFER_PIC && def->transfer != SM_TRANSFER_FLIP) snprintf(msg, sizeof msg, "transfer: unknown value %d", (int)def->transfer);
+    else if (!(def->flip_ratio >= 0 && def->flip_ratio <= 1)) snprintf(msg, sizeof msg, "flip_ratio: must be in [0, 1], got %g", def->flip_ratio);
+    else if (def->integrator == SM_INTEGRATOR_IMPLICIT) snprintf(msg, sizeof msg, "integrator: the implicit integrator is not available yet; use explicit");
+    else if (def->integrator != SM_INTEGRATOR_EXPLICIT) snprintf(msg, sizeof msg, "integrator: unknown value %d", (int)def->integrator);
+    else if (!(def->cfl > 0 && def->cfl <= 1)) snprintf(msg, sizeof msg, "cfl: must be in (0, 1], got %g", def->cfl);
+    else if (!(def->max_dt > 0) || !isfinite(def->max_dt)) snprintf(msg, sizeof msg, "max_dt: must be > 0, got %g", def->max_dt);
+    else if (!(def->elastic_cfl >= 0) || !isfinite(def->elastic_cfl)) snprintf(msg, sizeof msg, "elastic_cfl: must be >= 0, got %g", def->elastic_cfl);
+    else if (def->wall_mode != SM_COLLIDE_STICKY && def->wall_mode != SM_COLLIDE_SLIP && def->wall_mode != SM_COLLIDE_SEPARATE) snprintf(msg, sizeof msg, "wall_mode: unknown value %d", (int)def->wall_mode);
+    else if (!(def->wall_friction >= 0) || !isfinite(def->wall_friction)) snprintf(msg, sizeof msg, "wall_friction: must be >= 0, got %g", def->wall_friction);
+    if (!msg[0]) {
+        for (int a = 0; a < def->dim; a++) {
+            double len = def->domain_max[a] - def->domain_min[a];
+            double cells = ceil(len / def->dx - 1e-9);
+            if (!(len > 0)) {
+                snprintf(msg, sizeof msg, "domain: max must exceed min along axis %c (got %g .. %g)", "xyz"[a], def->domain_min[a], def->domain_max[a]);
+                break;
+            }
+            if (cells < 6) {
+                snprintf(msg, sizeof msg, "domain: at least 6 cells needed along axis %c, got %.0f (length %g, dx %g)", "xyz"[a], cells, len, def->dx);
+                break;
+            }
+            if (cells > 65536) {
+                snprintf(msg, sizeof msg, "domain: %.0f cells along axis %c is more than 65536", cells, "xyz"[a]);
+                break;
+            }
+        }
+    }
+    if (msg[0]) {
+        if (err && errlen) snprintf(err, errlen, "%s", msg);
+        return SM_ERR_INVALID;
+    }
+    sm_world *w = calloc(1, sizeof *w);
+    if (!w) {
+        if (err && errlen) snprintf(err, errlen, "out of memory");
+        return SM_ERR_NOMEM;
+    }
+    w->def = *def;
+    w->dim = def->dim;
+    w->ops = def->dim == 2 ? &sm_dim_ops_2d : &sm_dim_ops_3d;
+    w->inv_dx = 1.0 / def->dx;
+    int nodes[3] = {1, 1, 1};
+    for (int a = 0; a < 3; a++) {
+        if (a < def->dim) {
+            double len = def->domain_max[a] - def->domain_min[a];
+            w->cells[a] = (int)ceil(len / def->dx - 1e-9);
+            w->def.domain_max[a] = def->domain_min[a] + w->cells[a] * def->dx;
+            nodes[a] = w->cells[a] + 1;
+        } else {
+            w->cells[a] = 1;
+            w->def.domain_min[a] = w->def.domain_max[a] = 0;
+            w->def.gravity[a] = 0;
+        }
+    }
+    double nn = 1;
+    for (int a = 0; a < def->dim; a++) nn *= nodes[a] + 4;
+    double bytes = nn * (double)sizeof(sm_real) * (1 + 3 * def->dim);
+    if (bytes > 16e9) {
+        if (err && errlen) snprintf(err, errlen, "domain: the grid would need %.1f GB; use a larger dx or a smaller domain", bytes / 1e9);
+        free(w);
+        return SM_ERR_INVALID;
+    }
+    if (sm_grid_init(&w->grid, def->dim, nodes) != SM_OK) {
+        if (err && errlen) snprintf(err, errlen, "out of memory allocating the grid (%.1f MB)", bytes / 1e6);
+        free(w);
+        return SM_ERR_NOMEM;
+    }
+    w->block_start = calloc(w->grid.nblocks + 1, sizeof(uint32_t));
+    w->color_blocks = calloc(w->grid.nblocks, sizeof(uint32_t));
+    if (!w->block_start || !w->color_blocks) {
+        sm_world_destroy(w);
+        if (err && errlen) snprintf(err, errlen, "out of memory");
+        return SM_ERR_NOMEM;
+    }
+    w->threads = resolve_threads(def->threads);
+    w->min_dt = INFINITY;
+    w->max_dt = 0;
+    *out = w;
+    return SM_OK;
+}
+
+void sm_world_destroy(sm_world *w) {
+    if (!w) return;
+    sm_particles_free(&w->p);
+    sm_grid_free(&w->grid);
+    free(w->mats);
+    free(w->colliders);
+    free(w->keys);
+    free(w->perm);
+    free(w->block_start);
+    free(w->color_blocks);
+    free(w);
+}
+
+void sm_world_set_threads(sm_world *w, int threads) {
+    w->def.threads = threads;
+    w->threads = resolve_threads(threads);
+}
+
+const sm_world_def *sm_world_get_def(const sm_world *w) { return &w->def; }
+
+void sm_world_grid_size(const sm_world *w, int n[3]) {
+    for (int a = 0; a < 3; a++) n[a] = w->grid.nodes[a];
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Materials                                                                                    */
+
+sm_material_def sm_material_def_sand(void) {
+    sm_material_def m;
+    memset(&m, 0, sizeof m);
+    m.kind = SM_MATERIAL_SAND;
+    m.density = 2200;
+    m.youngs_modulus = 3.537e5;
+    m.poisson_ratio = 0.3;
+    m.hardening = 1;
+    m.friction_angle = 30;
+    m.h0 = 35;
+    m.h1 = 9;
+    m.h2 = 0.2;
+    m.h3 = 10;
+    return m;
+}
+
+sm_material_def sm_material_def_elastic(void) {
+    sm_material_def m;
+    memset(&m, 0, sizeof m);
+    m.kind = SM_MATERIAL_ELASTIC;
+    m.density = 1000;
+    m.youngs_modulus = 1e5;
+    m.poisson_ratio = 0.3;
+    return m;
+}
+
+static const double DEG = SM_PI / 180.0;
+
+double sm_hardening_friction_angle(const sm_material_def *m, double q) {
+    if (m->kind != SM_MATERIAL_SAND) return 0;
+    if (!m->hardening) return m->friction_angle;
+    return sm_hardening_phi(q, m->h0 * DEG, m->h1 * DEG, m->h2, m->h3 * DEG) / DEG;
+}
+
+double sm_alpha_from_friction_angle(double degrees) { return sm_dp_alpha(degrees * DEG); }
+
+int sm_world_add_material(sm_world *w, const sm_material_def *m) {
+    if (!m) return (sm_world_fail(w, SM_ERR_INVALID, "material definition is NULL"), -1);
+    if (m->kind != SM_MATERIAL_SAND && m->kind != SM_MATERIAL_ELASTIC)
+        return (sm_world_fail(w, SM_ERR_INVALID, "material kind: unknown value %d", (int)m->kind), -1);
+    if (!(m->density > 0) || !isfinite(m->density))
+        return (sm_world_fail(w, SM_ERR_INVALID, "density: must be > 0, got %g", m->density), -1);
+    if (!(m->youngs_modulus > 0) || !isfinite(m->youngs_modulus))
+        return (sm_world_fail(w, SM_ERR_INVALID, "E: must be > 0, got %g", m->youngs_modulus), -1);
+    if (!(m->poisson_ratio > -1 && m->poisson_ratio < 0.5))
+        return (sm_world_fail(w, SM_ERR_INVALID, "nu: must be in (-1, 0.5), got %g", m->poisson_ratio), -1);
+    if (m->kind == SM_MATERIAL_SAND) {
+        if (m->hardening) {
+            const double h[4] = {m->h0, m->h1, m->h2, m->h3};
+            for (int i = 0; i < 4; i++)
+                if (!isfinite(h[i]) || h[i] < 0)
+                    return (sm_world_fail(w, SM_ERR_INVALID, "h%d: must be finite and >= 0, got %g", i, h[i]), -1);
+            if (!(m->h0 > m->h3))
+                return (sm_world_fail(w, SM_ERR_INVALID, "hardening: need h0 > h3 (thesis §3.5.3), got h0 = %g, h3 = %g", m->h0, m->h3), -1);
+            if (!(m->h0 < 90) || !(m->h0 + m->h1 < 90 * 4))
+                return (sm_world_fail(w, SM_ERR_INVALID, "h0: must be < 90 degrees, got %g", m->h0), -1);
+        } else if (!(m->friction_angle >= 0 && m->friction_angle < 90)) {
+            return (sm_world_fail(w, SM_ERR_INVALID, "friction_angle: must be in [0, 90) degrees, got %g", m->friction_angle), -1);
+        }
+    }
+    if (w->nmats >= 65535) return (sm_world_fail(w, SM_ERR_INVALID, "too many materials (65535)"), -1);
+    if (w->nmats == w->mats_cap) {
+        int cap = w->mats_cap ? 2 * w->mats_cap : 4;
+        sm_material_rt *q = realloc(w->mats, (size_t)cap * sizeof *q);
+        if (!q) return (sm_world_fail(w, SM_ERR_NOMEM, "out of memory"), -1);
+        w->mats = q;
+        w->mats_cap = cap;
+    }
+    sm_material_rt *r = &w->mats[w->nmats];
+    memset(r, 0, sizeof *r);
+    r->def = *m;
+    double mu, lambda;
+    sm_lame(m->youngs_modulus, m->poisson_ratio, &mu, &lambda);
+    r->mu = (sm_real)mu;
+    r->lambda = (sm_real)lambda;
+    r->plastic = (m->kind == SM_MATERIAL_SAND);
+    r->hardening = r->plastic && m->hardening;
+    r->h0 = m->h0 * DEG;
+    r->h1 = m->h1 * DEG;
+    r->h2 = m->h2;
+    r->h3 = m->h3 * DEG;
+    if (r->plastic)
+        r->alpha0 = (sm_real)(r->hardening ? sm_dp_alpha(sm_hardening_phi(0, r->h0, r->h1, r->h2, r->h3))
+                                           : sm_dp_alpha(m->friction_angle * DEG));
+    r->wave_speed = sqrt((lambda + 2 * mu) / m->density);
+    return w->nmats++;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Particles                                                                                    */
+
+static sm_status reserve_particles(sm_world *w, size_t n) {
+    if (w->def.max_particles && n > w->def.max_particles)
+        return sm_world_fail(w, SM_ERR_INVALID, "particles: %zu would exceed max_particles = %zu", n, w->def.max_particles);
+    if (n > UINT32_MAX - 1) return sm_world_fail(w, SM_ERR_INVALID, "particles: at most %u supported", UINT32_MAX - 1);
+    if (sm_particles_reserve(&w->p, w->dim, n) != SM_OK)
+        return sm_world_fail(w, SM_ERR_NOMEM, "out of memory for %zu particles", n);
+    if (n > w->perm_cap) {
+        size_t cap = w->p.cap;
+        uint32_t *k = realloc(w->keys, cap * sizeof(uint32_t));
+        if (!k) return sm_world_fail(w, SM_ERR_NOMEM, "out of memory");
+        w->keys = k;
+        uint32_t *pm = realloc(w->perm, cap * sizeof(uint32_t));
+        if (!pm) return sm_world_fail(w, SM_ERR_NOMEM, "out of memory");
+        w->perm = pm;
+        w->perm_cap = cap;
+    }
+    return SM_OK;
+}
+
+void sm_world_init_stress(sm_world *w, size_t first) {
+    sm_step_ctx c;
+    memset(&c, 0, sizeof c);
+    c.threads = w->threads;
+    w->ops->plasticity(w, &c, first);
+}
+
+sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions, const double *velocities,
+                                 int material, double ppc) {
+    if (material < 0 || material >= w->nmats)
+        return sm_world_fail(w, SM_ERR_INVALID, "material: unknown id %d (%d defined)", material, w->nmats);
+    if (!(ppc > 0) || !isfinite(ppc)) return sm_world_fail(w, SM_ERR_INVALID, "ppc: must be > 0, got %g", ppc);
+    if (n == 0) return SM_OK;
+    const int d = w->dim;
+    const double lo_margin = 2.0 * w->def.dx;
+    for (size_t i = 0; i < n; i++) {
+        for (int a = 0; a < d; a++) {
+            double x = positions[i * 3 + a];
+            double lo = w->def.domain_min[a] + lo_margin, hi = w->def.domain_max[a] - lo_margin;
+            if (!isfinite(x) || x < lo || x > hi)
+                return sm_world_fail(w, SM_ERR_INVALID,
+                                     "particle %zu: position %c = %g is outside the usable domain [%g, %g] (2 cells inside the walls)",
+                                     i, "xyz"[a], x, lo, hi);
+            if (velocities && !isfinite(velocities[i * 3 + a]))
+                return sm_world_fail(w, SM_ERR_INVALID, "particle %zu: velocity is not finite", i);
+        }
+    }
+    size_t first = w->p.n;
+    sm_status st = reserve_particles(w, first + n);
+    if (st != SM_OK) return st;
+    const sm_material_rt *m = &w->mats[material];
+    double vol0 = pow(w->def.dx, d) / ppc;
+    sm_particles *P = &w->p;
+    for (size_t i = 0; i < n; i++) {
+        size_t p = first + i;
+        for (int a = 0; a < d; a++) {
+            P->x[p * d + a] = (sm_real)positions[i * 3 + a];
+            P->v[p * d + a] = velocities ? (sm_real)velocities[i * 3 + a] : 0;
+        }
+        for (int k = 0; k < d * d; k++) {
+            P->B[p * d * d + k] = 0;
+            P->F[p * d * d + k] = (k % (d + 1) == 0) ? 1 : 0;
+            P->tau[p * d * d + k] = 0;
+        }
+        P->vol0[p] = (sm_real)vol0;
+        P->mass[p] = (sm_real)(vol0 * m->def.density);
+        P->q[p] = 0;
+        P->alpha[p] = m->alpha0;
+        P->mat[p] = (uint16_t)material;
+    }
+    P->n = first + n;
+    return SM_OK;
+}
+
+void sm_world_particles(const sm_world *w, sm_particles_view *o) {
+    o->n = w->p.n;
+    o->dim = w->dim;
+    o->x = w->p.x;
+    o->v = w->p.v;
+    o->B = w->p.B;
+    o->F = w->p.F;
+    o->mass = w->p.mass;
+    o->vol0 = w->p.vol0;
+    o->q = w->p.q;
+    o->alpha = w->p.alpha;
+    o->material = w->p.mat;
+}
+
+sm_real *sm_world_particle_velocities(sm_world *w) { return w->p.v; }
+
+double sm_world_particle_friction_angle(const sm_world *w, size_t i) {
+    if (i >= w->p.n) return 0;
+    return sm_hardening_friction_angle(&w->mats[w->p.mat[i]].def, (double)w->p.q[i]);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Colliders                                                                                    */
+
+static int check_shape(sm_world *w, const sm_shape *s, int idx) {
+    double c3[3] = {s->center[0], s->center[1], s->center[2]};
+    if (!finite3(c3)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].center: must be finite", idx), 0);
+    switch (s->kind) {
+    case SM_SHAPE_HALFSPACE: {
+        double nn = s->normal[0] * s->normal[0] + s->normal[1] * s->normal[1] + (w->dim == 3 ? s->normal[2] * s->normal[2] : 0);
+        if (!(nn > 0) || !isfinite(nn)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].normal: must be a finite non-zero vector", idx), 0);
+        break;
+    }
+    case SM_SHAPE_BOX:
+        for (int a = 0; a < w->dim; a++)
+            if (!(s->half_extent[a] > 0) || !isfinite(s->half_extent[a]))
+                return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].half_extent: must be > 0, got %g", idx, s->half_extent[a]), 0);
+        break;
+    case SM_SHAPE_SPHERE:
+        if (!(s->radius > 0) || !isfinite(s->radius)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].radius: must be > 0, got %g", idx, s->radius), 0);
+        break;
+    case SM_SHAPE_CYLINDER:
+        if (!(s->radius > 0) || !isfinite(s->radius)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].radius: must be > 0, got %g", idx, s->radius), 0);
+        if (!(s->half_height > 0) || !isfinite(s->half_height)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].half_height: must be > 0, got %g", idx, s->half_height), 0);
+        break;
+    default: return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].kind: unknown value %d", idx, (int)s->kind), 0);
+    }
+    double qn = 0;
+    for (int k = 0; k < 4; k++) qn += s->rotation[k] * s->rotation[k];
+    if (!(fabs(qn - 1) < 1e-6)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].rotation: must be a unit quaternion (|q|^2 = %g)", idx, qn), 0);
+    return 1;
+}
+
+int sm_world_add_collider(sm_world *w, const sm_collider_def *c) {
+    if (!c) return (sm_world_fail(w, SM_ERR_INVALID, "collider definition is NULL"), -1);
+    if (c->shape_count < 1 || c->shape_count > SM_MAX_COLLIDER_SHAPES)
+        return (sm_world_fail(w, SM_ERR_INVALID, "collider shapes: need 1 to %d, got %d", SM_MAX_COLLIDER_SHAPES, c->shape_count), -1);
+    for (int i = 0; i < c->shape_count; i++)
+        if (!check_shape(w, &c->shapes[i], i)) return -1;
+    if (c->mode != SM_COLLIDE_STICKY && c->mode != SM_COLLIDE_SLIP && c->mode != SM_COLLIDE_SEPARATE)
+        return (sm_world_fail(w, SM_ERR_INVALID, "collider mode: unknown value %d", (int)c->mode), -1);
+    if (!(c->friction >= 0) || !isfinite(c->friction))
+        return (sm_world_fail(w, SM_ERR_INVALID, "collider friction: must be >= 0, got %g", c->friction), -1);
+    if (!finite3(c->velocity) || !finite3(c->angular_velocity) || !finite3(c->pose.position))
+        return (sm_world_fail(w, SM_ERR_INVALID, "collider motion: velocity, angular velocity and position must be finite"), -1);
+    double qn = 0;
+    for (int k = 0; k < 4; k++) qn += c->pose.rotation[k] * c->pose.rotation[k];
+    if (!(fabs(qn - 1) < 1e-6)) return (sm_world_fail(w, SM_ERR_INVALID, "collider pose.rotation: must be a unit quaternion"), -1);
+    if (w->ncolliders == w->colliders_cap) {
+        int cap = w->colliders_cap ? 2 * w->colliders_cap : 4;
+        sm_collider *q = realloc(w->colliders, (size_t)cap * sizeof *q);
+        if (!q) return (sm_world_fail(w, SM_ERR_NOMEM, "out of memory"), -1);
+        w->colliders = q;
+        w->colliders_cap = cap;
+    }
+    sm_collider_init(&w->colliders[w->ncolliders], c);
+    if (w->time != 0) {
+        /* Added mid-run: evaluate a scripted pose at the current time. */
+        if (c->motion) {
+            c->motion(c->motion_user, w->time, &w->colliders[w->ncolliders].pose0);
+            w->colliders[w->ncolliders].pose1 = w->colliders[w->ncolliders].pose0;
+            sm_quat_to_mat(w->colliders[w->ncolliders].pose0.rotation, w->colliders[w->ncolliders].R0);
+            memcpy(w->colliders[w->ncolliders].R1, w->colliders[w->ncolliders].R0, sizeof(double) * 9);
+        }
+    }
+    return w->ncolliders++;
+}
+
+double sm_world_collider_distance(const sm_world *w, int id, const double x[3], double grad[3]) {
+    if (id < 0 || id >= w->ncolliders) return INFINITY;
+    return sm_collider_phi(&w->colliders[id], w->dim, 0, x, grad);
+}
+
+void sm_world_collider_pose(const sm_world *w, int id, sm_pose *pose) {
+    if (id < 0 || id >= w->ncolliders) return;
+    *pose = w->colliders[id].pose0;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Time stepping                                                                                */
+
+double sm_world_time(const sm_world *w) { return w->time; }
+
+static double max_particle_speed(const sm_world *w) {
+    const int d = w->dim;
+    const long n = (long)w->p.n;
+    const sm_real *v = w->p.v;
+    double m2 = 0;
+#pragma omp parallel for schedule(static) reduction(max : m2) num_threads(w->threads)
+    for (long p = 0; p < n; p++) {
+        double s = 0;
+        for (int a = 0; a < d; a++) s += (double)v[p * d + a] * (double)v[p * d + a];
+        if (s > m2) m2 = s;
+    }
+    return sqrt(m2);
+}
+
+double sm_world_next_dt(sm_world *w, double t_end) {
+    double t0 = sm_seconds();
+    double dt = w->def.max_dt;
+    double vmax = max_particle_speed(w);
+    if (vmax > 0) dt = fmin(dt, w->def.cfl * w->def.dx / vmax);
+    if (w->def.elastic_cfl > 0) {
+        double c = 0;
+        for (int i = 0; i < w->nmats; i++) c = fmax(c, w->mats[i].wave_speed);
+        if (c > 0) dt = fmin(dt, w->def.elastic_cfl * w->def.dx / c);
+    }
+    double remaining = t_end - w->time;
+    if (remaining > 0) {
+        if (dt >= remaining * (1 - 1e-12)) dt = remaining;
+        else if (dt > 0.5 * remaining) dt = 0.5 * remaining; /* no sliver step at the frame end */
+    }
+    w->stage_seconds[SM_STAGE_DT] += sm_seconds() - t0;
+    return dt;
+}
+
+static void fill_ctx(const sm_world *w, double dt, sm_step_ctx *c) {
+    memset(c, 0, sizeof *c);
+    c->dt = dt;
+    c->dx = (sm_real)w->def.dx;
+    c->inv_dx = (sm_real)w->inv_dx;
+    for (int a = 0; a < 3; a++) {
+        c->lo[a] = (sm_real)w->def.domain_min[a];
+        c->gravity[a] = (sm_real)w->def.gravity[a];
+    }
+    c->threads = w->threads;
+}
+
+static long first_bad_particle(const sm_world *w) {
+    const int d = w->dim, dd = d * d;
+    const sm_particles *P = &w->p;
+    for (size_t p = 0; p < P->n; p++) {
+        int ok = 1;
+        for (int a = 0; a < d; a++) ok &= isfinite(P->x[p * d + a]) && isfinite(P->v[p * d + a]);
+        for (int k = 0; k < dd; k++) ok &= isfinite(P->F[p * dd + k]) && isfinite(P->tau[p * dd + k]);
+        if (!ok) return (long)p;
+    }
+    return -1;
+}
+
+sm_status sm_world_step(sm_world *w, double dt) {
+    if (w->failed)
+        return sm_world_fail(w, SM_ERR_NUMERICAL, "the world stopped after a numerical failure at step %llu; create a new one",
+                             (unsigned long long)w->steps);
+    if (!(dt > 0) || !isfinite(dt)) return sm_world_fail(w, SM_ERR_INVALID, "step: dt must be > 0, got %g", dt);
+    sm_step_ctx c;
+    fill_ctx(w, dt, &c);
+    for (int i = 0; i < w->ncolliders; i++) sm_collider_begin_step(&w->colliders[i], w->time, dt);
+    if (w->p.n > 0) {
+        double t0 = sm_seconds(), t1;
+        long pre = first_bad_particle(w);
+        if (pre >= 0) {
+            w->failed = 1;
+            return sm_world_fail(w, SM_ERR_NUMERICAL,
+                                 "step %llu (t = %.6g s): particle %ld (material %d) enters the step with a non-finite "
+                                 "position, velocity or deformation gradient",
+                                 (unsigned long long)w->steps + 1, w->time, pre, (int)w->p.mat[pre]);
+        }
+        w->ops->sort(w, &c);
+        t1 = sm_seconds();
+        w->stage_seconds[SM_STAGE_SORT] += t1 - t0;
+        w->ops->p2g(w, &c, 1);
+        t0 = sm_seconds();
+        w->stage_seconds[SM_STAGE_P2G] += t0 - t1;
+        w->ops->grid_update(w, &c);
+        t1 = sm_seconds();
+        w->stage_seconds[SM_STAGE_GRID] += t1 - t0;
+        long bad = w->ops->grid_check(w);
+        if (bad >= 0) {
+            int ijk[3];
+            sm_grid_node_coords(&w->grid, (size_t)bad, ijk);
+            w->failed = 1;
+            return sm_world_fail(w, SM_ERR_NUMERICAL,
+                                 "step %llu (t = %.6g s, dt = %.3g s): grid node (%d, %d, %d) has a non-finite velocity; "
+                                 "particle state is that of the last good step",
+                                 (unsigned long long)w->steps + 1, w->time, dt, ijk[0], ijk[1], ijk[2]);
+        }
+        t0 = sm_seconds();
+        w->ops->g2p(w, &c);
+        t1 = sm_seconds();
+        w->stage_seconds[SM_STAGE_G2P] += t1 - t0;
+        w->ops->plasticity(w, &c, 0);
+        t0 = sm_seconds();
+        w->stage_seconds[SM_STAGE_PLASTICITY] += t0 - t1;
+        long badp = first_bad_particle(w);
+        if (badp >= 0) {
+            w->failed = 1;
+            return sm_world_fail(w, SM_ERR_NUMERICAL,
+                                 "step %llu (t = %.6g s, dt = %.3g s): particle %ld (material %d) has a non-finite position, "
+                                 "velocity or deformation gradient",
+                                 (unsigned long long)w->steps + 1, w->time, dt, badp, (int)w->p.mat[badp]);
+        }
+    }
+    for (int i = 0; i < w->ncolliders; i++) sm_collider_end_step(&w->colliders[i]);
+    w->time += dt;
+    w->steps++;
+    w->last_dt = dt;
+    if (dt < w->min_dt) w->min_dt = dt;
+    if (dt > w->max_dt) w->max_dt = dt;
+    return SM_OK;
+}
+
+sm_status sm_world_advance(sm_world *w, double t_end) {
+    if (!isfinite(t_end)) return sm_world_fail(w, SM_ERR_INVALID, "advance: end time must be finite");
+    while (w->time < t_end) {
+        double dt = sm_world_next_dt(w, t_end);
+        int last = (dt == t_end - w->time);
+        sm_status st = sm_world_step(w, dt);
+        if (st != SM_OK) return st;
+        if (last) w->time = t_end;
+    }
+    return SM_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Diagnostics                                                                                  */
+
+void sm_world_particle_totals(const sm_world *w, double *mass, double mom[3], double ang[3]) {
+    const int d = w->dim, dd = d * d;
+    const sm_particles *P = &w->p;
+    *mass = 0;
+    for (int a = 0; a < 3; a++) mom[a] = ang[a] = 0;
+    const int apic = (w->def.transfer == SM_TRANSFER_APIC);
+    for (size_t p = 0; p < P->n; p++) {
+        double m = (double)P->mass[p];
+        double x[3] = {0, 0, 0}, v[3] = {0, 0, 0}, B[9] = {0};
+        for (int a = 0; a < d; a++) {
+            x[a] = (double)P->x[p * d + a];
+            v[a] = (double)P->v[p * d + a];
+        }
+        if (apic)
+            for (int a = 0; a < d; a++)
+                for (int e = 0; e < d; e++) B[a * 3 + e] = (double)P->B[p * dd + a * d + e];
+        *mass += m;
+        for (int a = 0; a < 3; a++) mom[a] += m * v[a];
+        /* L_p = m (x x v) + m eps_abc B_cb (APIC's affine part, derived from P2G of (3.87)). */
+        ang[0] += m * (x[1] * v[2] - x[2] * v[1] + B[2 * 3 + 1] - B[1 * 3 + 2]);
+        ang[1] += m * (x[2] * v[0] - x[0] * v[2] + B[0 * 3 + 2] - B[2 * 3 + 0]);
+        ang[2] += m * (x[0] * v[1] - x[1] * v[0] + B[1 * 3 + 0] - B[0 * 3 + 1]);
+    }
+}
+
+void sm_world_diagnostics(const sm_world *w, sm_diagnostics *o) {
+    memset(o, 0, sizeof *o);
+    const int d = w->dim;
+    const sm_particles *P = &w->p;
+    o->particles = P->n;
+    sm_world_particle_totals(w, &o->total_mass, o->momentum, o->angular_momentum);
+    double ke = 0, vmax2 = 0, com[3] = {0, 0, 0};
+    for (size_t p = 0; p < P->n; p++) {
+        double s = 0;
+        for (int a = 0; a < d; a++) {
+            double va = (double)P->v[p * d + a];
+            s += va * va;
+            com[a] += (double)P->mass[p] * (double)P->x[p * d + a];
+        }
+        ke += 0.5 * (double)P->mass[p] * s;
+        if (s > vmax2) vmax2 = s;
+    }
+    o->kinetic_energy = ke;
+    o->max_speed = sqrt(vmax2);
+    for (int a = 0; a < 3; a++) o->center_of_mass[a] = o->total_mass > 0 ? com[a] / o->total_mass : 0;
+    o->elastic_energy = P->n ? w->ops->elastic_energy(w) : 0;
+    o->steps = w->steps;
+    o->time = w->time;
+    o->last_dt = w->last_dt;
+    o->min_dt = isfinite(w->min_dt) ? w->min_dt : 0;
+    o->max_dt = w->max_dt;
+    for (int s = 0; s < SM_STAGE_COUNT; s++) o->stage_seconds[s] = w->stage_seconds[s];
+    o->clamped_particles = w->clamped;
+}
+
+void sm_world_reset_step_stats(sm_world *w) {
+    w->min_dt = INFINITY;
+    w->max_dt = 0;
+}
+
+uint64_t sm_world_state_hash(const sm_world *w) {
+    const sm_particles *P = &w->p;
+    const size_t n = P->n, d = (size_t)w->dim, dd = d * d;
+    uint64_t h = SM_HASH_INIT;
+    h = sm_hash64(&n, sizeof n, h);
+    h = sm_hash64(P->x, n * d * sizeof(sm_real), h);
+    h = sm_hash64(P->v, n * d * sizeof(sm_real), h);
+    h = sm_hash64(P->B, n * dd * sizeof(sm_real), h);
+    h = sm_hash64(P->F, n * dd * sizeof(sm_real), h);
+    h = sm_hash64(P->q, n * sizeof(sm_real), h);
+    h = sm_hash64(P->alpha, n * sizeof(sm_real), h);
+    return h;
+}
+
+void sm_world_debug_transfer_roundtrip(sm_world *w, sm_transfer_totals *t) {
+    sm_step_ctx c;
+    fill_ctx(w, 0.0, &c);
+    for (int a = 0; a < 3; a++) c.gravity[a] = 0;
+    sm_world_particle_totals(w, &t->mass[0], t->mom[0], t->ang[0]);
+    w->ops->sort(w, &c);
+    w->ops->p2g(w, &c, 0);
+    /* v^n = mv/m, and v-bar = v-tilde = v^n: no force, no gravity, no collision. */
+    sm_grid *g = &w->grid;
+    const size_t bn = (size_t)g->block_nodes, d = (size_t)w->dim;
+    for (size_t k = 0; k < g->nactive; k++) {
+        size_t b = g->active_list[k];
+        for (size_t ni = b * bn; ni < (b + 1) * bn; ni++)
+            for (size_t a = 0; a < d; a++) {
+                sm_real v = g->m[ni] > 0 ? g->v[ni * d + a] / g->m[ni] : 0;
+                g->v[ni * d + a] = g->f[ni * d + a] = g->vt[ni * d + a] = v;
+            }
+    }
+    w->ops->grid_totals(w, 0, &t->mass[1], t->mom[1], t->ang[1]);
+    w->ops->g2p(w, &c);
+    sm_world_particle_totals(w, &t->mass[2], t->mom[2], t->ang[2]);
+}

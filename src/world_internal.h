@@ -1,0 +1,127 @@
+/* The world's internal layout, shared by world.c and the dimension-generic stages
+ * (src/integrate/step_dim.c, compiled once per dimension). Not part of the public API. */
+#ifndef SM_WORLD_INTERNAL_H
+#define SM_WORLD_INTERNAL_H
+
+#include "collide/collide.h"
+#include "core/common.h"
+#include "grid/grid.h"
+
+/* A material with everything the hot loops need precomputed. */
+typedef struct sm_material_rt {
+    sm_material_def def;
+    sm_real mu, lambda;     /* Lame parameters, Pa */
+    int plastic;            /* 1 for sand */
+    int hardening;          /* 1: alpha follows q through (3.79)-(3.80) */
+    double h0, h1, h2, h3;  /* radians (h2 dimensionless) */
+    sm_real alpha0;         /* alpha at q = 0 (fixed angle or hardening start) */
+    double wave_speed;      /* sqrt((lambda + 2 mu)/rho), m/s */
+} sm_material_rt;
+
+/* Particles, structure of arrays. d = dim; matrices d*d row-major. */
+typedef struct sm_particles {
+    size_t n, cap;
+    sm_real *x, *v, *B, *F;
+    sm_real *tau;           /* Kirchhoff stress of F^E (d*d), computed at the end of the previous
+                               step's plasticity (or at insertion): P F^T = tau, so the next P2G
+                               needs no second SVD (one SVD per particle per step). */
+    sm_real *mass, *vol0, *q, *alpha;
+    uint16_t *mat;
+} sm_particles;
+
+/* Per-step context (DESIGN §3): what the stages need, so the world holds no per-step scratch. */
+typedef struct sm_step_ctx {
+    double dt;
+    sm_real dx, inv_dx;
+    sm_real lo[3];          /* domain_min as sm_real */
+    sm_real gravity[3];
+    int threads;
+} sm_step_ctx;
+
+/* Function table of one dimension (filled by step_dim.c for SM_DIM = 2 and 3). */
+typedef struct sm_dim_ops {
+    int dim;
+    /* Bin particles by grid block: fills w->perm, w->block_* lists and the active grid blocks. */
+    void (*sort)(sm_world *w, const sm_step_ctx *c);
+    /* P2G: mass, momentum (APIC/PIC/FLIP), internal force from tau; with_force = 0 skips stress. */
+    void (*p2g)(sm_world *w, const sm_step_ctx *c, int with_force);
+    /* Grid update v* = v + dt (f/m + g), colliders and walls (v-bar), friction (v-tilde). */
+    void (*grid_update)(sm_world *w, const sm_step_ctx *c);
+    /* Returns the index of a node with a non-finite velocity, or -1. */
+    long (*grid_check)(const sm_world *w);
+    /* G2P: v, B from v-tilde; x, F^E-hat from v-bar. */
+    void (*g2p)(sm_world *w, const sm_step_ctx *c);
+    /* Plasticity and hardening (Algorithm 2), then tau for the next step. */
+    void (*plasticity)(sm_world *w, const sm_step_ctx *c, size_t first);
+    /* Elastic energy sum V0 psi(F^E). */
+    double (*elastic_energy)(const sm_world *w);
+    /* Grid totals (mass, momentum, angular momentum about the origin) of the current grid
+     * velocities `which` (0: v^n after P2G, 1: v-tilde) — used by tests. */
+    void (*grid_totals)(const sm_world *w, int which, double *mass, double mom[3], double ang[3]);
+} sm_dim_ops;
+
+extern const sm_dim_ops sm_dim_ops_2d;
+extern const sm_dim_ops sm_dim_ops_3d;
+
+struct sm_world {
+    sm_world_def def;
+    int dim;
+    const sm_dim_ops *ops;
+    double inv_dx;
+    int cells[3];           /* cells per axis (1 along z in 2D) */
+
+    sm_material_rt *mats;
+    int nmats, mats_cap;
+
+    sm_particles p;
+
+    sm_collider *colliders;
+    int ncolliders, colliders_cap;
+
+    sm_grid grid;
+
+    /* Binning scratch, grown as needed, never shrunk. */
+    uint32_t *keys;         /* block id per particle */
+    uint32_t *perm;         /* particle indices sorted by block (stable) */
+    size_t perm_cap;
+    uint32_t *block_start;  /* per grid block: first position in perm (size nblocks + 1) */
+    uint32_t *color_blocks; /* particle blocks grouped by color */
+    uint32_t color_count[8], color_offset[9];
+
+    /* Time and statistics. */
+    double time;
+    uint64_t steps;
+    double last_dt, min_dt, max_dt;
+    double stage_seconds[SM_STAGE_COUNT];
+    uint64_t clamped;
+    int threads;
+    int failed;             /* a numerical failure stopped the world */
+
+    char err[512];
+};
+
+/* Sets the world's message (printf style) and returns status. */
+sm_status sm_world_fail(sm_world *w, sm_status status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Grows particle storage to hold at least n particles. */
+sm_status sm_particles_reserve(sm_particles *p, int dim, size_t n);
+void sm_particles_free(sm_particles *p);
+
+/* Computes tau (Kirchhoff stress) for particles [first, n) from their F (one SVD each). */
+void sm_world_init_stress(sm_world *w, size_t first);
+
+/* Test hook: sort + P2G without forces, grid totals, then G2P with dt = 0 (positions unchanged).
+ * Reports particle totals before, grid totals, particle totals after. */
+typedef struct sm_transfer_totals {
+    double mass[3], mom[3][3], ang[3][3]; /* [0] particles before, [1] grid, [2] particles after */
+} sm_transfer_totals;
+void sm_world_debug_transfer_roundtrip(sm_world *w, sm_transfer_totals *t);
+
+/* Particle totals: mass, momentum, angular momentum (APIC B term included). */
+void sm_world_particle_totals(const sm_world *w, double *mass, double mom[3], double ang[3]);
+
+#endif

@@ -66,6 +66,7 @@ sm_world_def sm_world_def_default(void) {
     d.elastic_cfl = 0.5;
     d.wall_mode = SM_COLLIDE_SEPARATE;
     d.wall_friction = 0;
+    d.static_friction_sticks = 1;
     d.threads = 0;
     d.max_particles = 0;
     return d;

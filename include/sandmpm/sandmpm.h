@@ -102,6 +102,12 @@ typedef struct sm_world_def {
     double elastic_cfl;      /**< factor on the elastic-wave bound dt <= elastic_cfl*dx/c, c = sqrt((lambda+2mu)/rho). Default 0.5. 0 disables it. */
     sm_collide_mode wall_mode;/**< behaviour of the domain walls. Default SM_COLLIDE_SEPARATE. */
     double wall_friction;    /**< Coulomb coefficient of the domain walls. Default 0. */
+    int static_friction_sticks; /**< 1 (default): a grid node whose Coulomb friction stops it relative to a
+                                     collider (static regime) also moves with that stopped velocity in the
+                                     position and F update, i.e. static friction acts as a constraint like
+                                     sticky. 0: positions and F always use the pre-friction velocities, exactly
+                                     as thesis §3.6.5; that lets a block creep down an incline at a speed of
+                                     about g sin(theta) dt M / m_contact even when mu > tan(theta). */
     int threads;             /**< OpenMP threads; 0 = OpenMP's default. Results do not depend on it. */
     size_t max_particles;    /**< refuse to grow beyond this many particles; 0 = no limit. */
 } sm_world_def;

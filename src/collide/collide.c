@@ -385,14 +385,18 @@ void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3],
     }
 }
 
-void sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const sm_node_contact *rec,
-                      const double dv[3], double v[3]) {
-    if (rec->sticky >= 0) return;
+int sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const sm_node_contact *rec,
+                     const double dv[3], double v[3]) {
+    if (rec->sticky >= 0) return 0;
     double dvn = norm_n(dv, dim);
+    int stuck = rec->count > 0;
     for (int j = 0; j < rec->count; j++) {
         const sm_collider *c = &cs[rec->body[j]];
         double limit = c->def.friction * dvn;
-        if (!(limit > 0.0)) continue;
+        if (!(limit > 0.0)) {
+            stuck = 0;
+            continue;
+        }
         const double *n = rec->n[j];
         double vb[3], vr[3] = {0.0, 0.0, 0.0}, vt[3] = {0.0, 0.0, 0.0};
         sm_collider_velocity(c, dim, xi, vb);
@@ -406,6 +410,8 @@ void sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const 
         } else {
             double f = limit / vtn;
             for (int k = 0; k < dim; k++) v[k] -= f * vt[k];
+            stuck = 0;
         }
     }
+    return stuck;
 }

@@ -61,9 +61,10 @@ void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3],
 /* FRICTION for one node: v (in: v-bar, out: v-tilde); dv = v-bar - v* is the collision impulse per
  * unit mass. For each recorded slip/separate collision b with normal n, relative velocity
  * vr = v - v_b, tangential part vt = vr - n (n . vr): v -= min(|vt|, mu_b |dv|) vt/|vt|.
- * Sticky nodes are unchanged. */
-void sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const sm_node_contact *rec,
-                      const double dv[3], double v[3]);
+ * Sticky nodes are unchanged. Returns 1 if the node has recorded collisions and every one of them
+ * was in the static regime (|vt| <= mu |dv|: tangential relative motion stopped), else 0. */
+int sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const sm_node_contact *rec,
+                     const double dv[3], double v[3]);
 
 /* Rotation matrix (row-major) of a unit quaternion (w,x,y,z). */
 void sm_quat_to_mat(const double q[4], double R[9]);

@@ -217,6 +217,7 @@ static void SM_FN(grid_update)(sm_world *w, const sm_step_ctx *c) {
     const double dt = c->dt;
     const sm_collider *cols = w->colliders;
     const int ncol = w->ncolliders;
+    const int static_sticks = w->def.static_friction_sticks;
 #pragma omp parallel for schedule(static) num_threads(c->threads)
     for (long t = 0; t < nb; t++) {
         size_t b = g->active_list[t];
@@ -243,8 +244,11 @@ static void SM_FN(grid_update)(sm_world *w, const sm_step_ctx *c) {
                 if (rec.count > 0) {
                     double dv[3] = {v[0] - vstar[0], v[1] - vstar[1], v[2] - vstar[2]};
                     for (int a = 0; a < D; a++) g->f[ni * D + a] = (sm_real)v[a]; /* v-bar */
-                    sm_friction_node(cols, D, xi, &rec, dv, v);
-                    for (int a = 0; a < D; a++) g->vt[ni * D + a] = (sm_real)v[a];
+                    int stuck = sm_friction_node(cols, D, xi, &rec, dv, v);
+                    for (int a = 0; a < D; a++) {
+                        g->vt[ni * D + a] = (sm_real)v[a];
+                        if (stuck && static_sticks) g->f[ni * D + a] = (sm_real)v[a];
+                    }
                     goto walls_done;
                 }
             }

@@ -1,0 +1,158 @@
+/* Material model: Hencky-strain St. Venant–Kirchhoff elasticity, Drucker–Prager return mapping and
+ * hardening, all as pure functions of the singular values Sigma = diag(s_1..s_d) of F^E.
+ *
+ * Equations (Klár 2016 thesis; eps = ln Sigma, the principal Hencky strain, (3.62)):
+ *   Lamé:        mu = E / (2 (1 + nu)),  lambda = E nu / ((1 + nu)(1 - 2 nu))
+ *   (3.71)       psi = mu tr(eps^2) + lambda/2 (tr eps)^2
+ *   Alg. 4       ENERGY_DERIVATIVE: dpsi/ds_i = (2 mu eps_i + lambda tr eps) / s_i,
+ *                P = U diag(dpsi/ds) V^T for F = U Sigma V^T
+ *   (3.70)       tau_i = dpsi/deps_i = s_i dpsi/ds_i = 2 mu eps_i + lambda tr eps
+ *                (principal Kirchhoff stress: P F^T = U diag(tau) U^T)
+ *   (3.68),(3.70) yield  y = ||dev tau|| + alpha tr tau = 2 mu ||dev eps|| + alpha (d lambda + 2 mu) tr eps
+ *   (3.66)       dev A = A - tr(A)/d I
+ *   (3.76)       dgamma = ||dev eps||_F + (d lambda + 2 mu)/(2 mu) tr(eps) alpha
+ *   (3.75),(3.77) case III: H = eps - dgamma dev(eps)/||dev eps||_F, Sigma_new = exp(H)
+ *   Alg. 2       PROJECT: case II (tr eps > 0 or dev eps = 0): Sigma_new = I, dq = ||eps||_F;
+ *                case I (dgamma <= 0): unchanged, dq = 0; case III: dq = dgamma  (§3.5.3)
+ *   (3.79)       phi_F = h0 + (h1 q - h3) exp(-h2 q)
+ *   (3.80)       alpha = sqrt(2/3) 2 sin(phi_F) / (3 - sin(phi_F))
+ *                (the square root covers only 2/3, as in Algorithm 2 line 9; the extracted text of
+ *                (3.80) misplaces it)
+ *
+ * Case III is evaluated in the algebraically identical form
+ *   H = tr(eps)/d I + (1 - dgamma/||dev eps||) dev eps,  1 - dgamma/||dev eps|| = -(d lambda + 2 mu) tr(eps) alpha / (2 mu ||dev eps||),
+ * so that the result lies on the cone (y = 0) to rounding and its deviator is exactly parallel to
+ * the trial one.
+ *
+ * Inverted/degenerate F: see SM_SIGMA_FLOOR in material.h. */
+#include "material/material.h"
+
+#include <math.h>
+
+/* Raise singular values to the floor. Written so that NaN propagates instead of being hidden. */
+static void clamp_sigma(int d, const sm_real *sigma, sm_real *c) {
+    for (int i = 0; i < d; i++) c[i] = sigma[i] < SM_SIGMA_FLOOR ? SM_SIGMA_FLOOR : sigma[i];
+}
+
+/* eps = ln(max(sigma, floor)); returns tr eps. */
+static sm_real hencky_strain(int d, const sm_real *sigma, sm_real *c, sm_real *eps) {
+    clamp_sigma(d, sigma, c);
+    sm_real tr = 0;
+    for (int i = 0; i < d; i++) {
+        eps[i] = sm_log(c[i]);
+        tr += eps[i];
+    }
+    return tr;
+}
+
+static sm_real norm_d(int d, const sm_real *v) {
+    sm_real s = 0;
+    for (int i = 0; i < d; i++) s += v[i] * v[i];
+    return sm_sqrt(s);
+}
+
+void sm_lame(double E, double nu, double *mu, double *lambda) {
+    SM_ASSERT(mu != NULL && lambda != NULL);
+    *mu = E / (2.0 * (1.0 + nu));
+    *lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+}
+
+sm_real sm_hencky_psi(int d, const sm_real *sigma, sm_real mu, sm_real lambda) {
+    SM_ASSERT(d == 2 || d == 3);
+    sm_real c[3], eps[3];
+    sm_real tr = hencky_strain(d, sigma, c, eps);
+    sm_real sq = 0;
+    for (int i = 0; i < d; i++) sq += eps[i] * eps[i];
+    return mu * sq + SM_R(0.5) * lambda * tr * tr;
+}
+
+void sm_hencky_dpsi(int d, const sm_real *sigma, sm_real mu, sm_real lambda, sm_real *out) {
+    SM_ASSERT(d == 2 || d == 3);
+    sm_real c[3], eps[3];
+    sm_real tr = hencky_strain(d, sigma, c, eps);
+    for (int i = 0; i < d; i++) out[i] = (2 * mu * eps[i] + lambda * tr) / c[i];
+}
+
+void sm_hencky_tau(int d, const sm_real *sigma, sm_real mu, sm_real lambda, sm_real *tau) {
+    SM_ASSERT(d == 2 || d == 3);
+    sm_real c[3], eps[3];
+    sm_real tr = hencky_strain(d, sigma, c, eps);
+    for (int i = 0; i < d; i++) {
+        sm_real t = 2 * mu * eps[i] + lambda * tr;
+        /* below the floor: s_i dpsi/ds_i with dpsi held at the floor, so that
+         * U diag(tau) U^T = P F^T holds for an inverted F too */
+        tau[i] = sigma[i] < SM_SIGMA_FLOOR ? t * (sigma[i] / SM_SIGMA_FLOOR) : t;
+    }
+}
+
+sm_real sm_dp_yield(int d, const sm_real *sigma, sm_real alpha, sm_real mu, sm_real lambda) {
+    SM_ASSERT(d == 2 || d == 3);
+    sm_real c[3], eps[3], dev[3];
+    sm_real tr = hencky_strain(d, sigma, c, eps);
+    for (int i = 0; i < d; i++) dev[i] = eps[i] - tr / (sm_real)d;
+    return 2 * mu * norm_d(d, dev) + alpha * ((sm_real)d * lambda + 2 * mu) * tr;
+}
+
+int sm_dp_project(int d, const sm_real *sigma, sm_real alpha, sm_real mu, sm_real lambda,
+                  sm_real *out, sm_real *dq) {
+    SM_ASSERT(d == 2 || d == 3);
+    SM_ASSERT(mu > 0);
+    sm_real c[3], eps[3], dev[3];
+    sm_real tr = hencky_strain(d, sigma, c, eps);
+    sm_real mean = tr / (sm_real)d;
+    sm_real emax = 0, devmax = 0;
+    for (int i = 0; i < d; i++) {
+        dev[i] = eps[i] - mean;
+        emax = SM_MAX(emax, sm_fabs(eps[i]));
+        devmax = SM_MAX(devmax, sm_fabs(dev[i]));
+    }
+    /* "dev eps = 0": computing dev from d logarithms rounds to a few ulps of max|eps_i| even for an
+     * exactly hydrostatic Sigma, so a deviator at or below 2 d SM_EPS max|eps_i| is zero. */
+    int zero_dev = devmax <= SM_R(2.0) * (sm_real)d * SM_EPS * emax;
+    if (zero_dev || tr > 0) { /* case II: tip of the cone */
+        *dq = norm_d(d, eps);
+        for (int i = 0; i < d; i++) out[i] = 1;
+        return 2;
+    }
+    sm_real ndev = norm_d(d, dev);
+    sm_real kappa = ((sm_real)d * lambda + 2 * mu) / (2 * mu) * tr * alpha; /* <= 0 for alpha >= 0 */
+    sm_real dgamma = ndev + kappa;
+    if (dgamma <= 0) { /* case I: inside the cone; the input is kept as it is (even inverted) */
+        *dq = 0;
+        for (int i = 0; i < d; i++) out[i] = sigma[i];
+        return 1;
+    }
+    /* case III: back to the cone along -dev(eps). ||dev H|| = ndev - dgamma = -kappa. */
+    sm_real scale = -kappa / ndev;
+    for (int i = 0; i < d; i++) out[i] = sm_exp(mean + scale * dev[i]);
+    *dq = dgamma;
+    return 3;
+}
+
+double sm_dp_alpha(double phi_rad) {
+    double s = sin(phi_rad);
+    return sqrt(2.0 / 3.0) * 2.0 * s / (3.0 - s);
+}
+
+double sm_hardening_phi(double q, double h0, double h1, double h2, double h3) {
+    return h0 + (h1 * q - h3) * exp(-h2 * q);
+}
+
+void sm_material_udvt(int d, const sm_real *U, const sm_real *diag, const sm_real *V, sm_real *out) {
+    SM_ASSERT(d == 2 || d == 3);
+    sm_real r[9];
+    for (int i = 0; i < d; i++)
+        for (int j = 0; j < d; j++) {
+            sm_real s = 0;
+            for (int k = 0; k < d; k++) s += U[i * d + k] * diag[k] * V[j * d + k];
+            r[i * d + j] = s;
+        }
+    for (int i = 0; i < d * d; i++) out[i] = r[i];
+}
+
+void sm_hencky_piola(int d, const sm_real *U, const sm_real *sigma, const sm_real *V, sm_real mu,
+                     sm_real lambda, sm_real *P) {
+    sm_real g[3];
+    sm_hencky_dpsi(d, sigma, mu, lambda, g);
+    sm_material_udvt(d, U, g, V, P);
+}

@@ -67,6 +67,7 @@ sm_world_def sm_world_def_default(void) {
     d.wall_mode = SM_COLLIDE_SEPARATE;
     d.wall_friction = 0;
     d.static_friction_sticks = 1;
+    d.particle_projection = 1;
     d.threads = 0;
     d.max_particles = 0;
     return d;
@@ -511,14 +512,26 @@ static void fill_ctx(const sm_world *w, double dt, sm_step_ctx *c) {
     c->threads = w->threads;
 }
 
-static long first_bad_particle(const sm_world *w) {
+/* First particle with non-finite state, or (if dt > 0) one that would move more than one cell in
+ * dt (the CFL bound that the stencil and the colour schedule rely on). *fast says which. */
+static long first_bad_particle(const sm_world *w, double dt, int *fast) {
     const int d = w->dim, dd = d * d;
     const sm_particles *P = &w->p;
+    const double lim2 = dt > 0 ? (w->def.dx / dt) * (w->def.dx / dt) : INFINITY;
+    *fast = 0;
     for (size_t p = 0; p < P->n; p++) {
         int ok = 1;
-        for (int a = 0; a < d; a++) ok &= isfinite(P->x[p * d + a]) && isfinite(P->v[p * d + a]);
+        double s2 = 0;
+        for (int a = 0; a < d; a++) {
+            ok &= isfinite(P->x[p * d + a]) && isfinite(P->v[p * d + a]);
+            s2 += (double)P->v[p * d + a] * (double)P->v[p * d + a];
+        }
         for (int k = 0; k < dd; k++) ok &= isfinite(P->F[p * dd + k]) && isfinite(P->tau[p * dd + k]);
         if (!ok) return (long)p;
+        if (s2 > lim2) {
+            *fast = 1;
+            return (long)p;
+        }
     }
     return -1;
 }
@@ -533,9 +546,24 @@ sm_status sm_world_step(sm_world *w, double dt) {
     for (int i = 0; i < w->ncolliders; i++) sm_collider_begin_step(&w->colliders[i], w->time, dt);
     if (w->p.n > 0) {
         double t0 = sm_seconds(), t1;
-        long pre = first_bad_particle(w);
+        int fast = 0;
+        long pre = first_bad_particle(w, dt, &fast);
         if (pre >= 0) {
             w->failed = 1;
+            if (fast) {
+                const int d = w->dim;
+                double vm = 0, s2 = 0; /* speed without overflow */
+                for (int a = 0; a < d; a++) vm = fmax(vm, fabs((double)w->p.v[pre * d + a]));
+                for (int a = 0; a < d; a++) s2 += ((double)w->p.v[pre * d + a] / vm) * ((double)w->p.v[pre * d + a] / vm);
+                s2 *= vm * vm;
+                if (!isfinite(s2)) s2 = vm * vm * (double)d;
+                return sm_world_fail(w, SM_ERR_NUMERICAL,
+                                     "step %llu (t = %.6g s): particle %ld (material %d) moves at %.3g m/s, %.3g cells in "
+                                     "dt = %.3g s; more than one cell per step breaks the method (CFL): use a smaller dt "
+                                     "or sm_world_advance",
+                                     (unsigned long long)w->steps + 1, w->time, pre, (int)w->p.mat[pre],
+                                     isfinite(s2) ? sqrt(s2) : vm, (isfinite(s2) ? sqrt(s2) : vm) * dt / w->def.dx, dt);
+            }
             return sm_world_fail(w, SM_ERR_NUMERICAL,
                                  "step %llu (t = %.6g s): particle %ld (material %d) enters the step with a non-finite "
                                  "position, velocity or deformation gradient",
@@ -554,11 +582,29 @@ sm_status sm_world_step(sm_world *w, double dt) {
         if (bad >= 0) {
             int ijk[3];
             sm_grid_node_coords(&w->grid, (size_t)bad, ijk);
+            /* Name the particle nearest to that node: the likely source. */
+            const int d = w->dim;
+            double best = INFINITY, speed = 0;
+            long bp = -1;
+            for (size_t p = 0; p < w->p.n; p++) {
+                double r2 = 0, s2 = 0;
+                for (int a = 0; a < d; a++) {
+                    double xa = w->def.domain_min[a] + ijk[a] * w->def.dx - (double)w->p.x[p * d + a];
+                    r2 += xa * xa;
+                    s2 += (double)w->p.v[p * d + a] * (double)w->p.v[p * d + a];
+                }
+                if (r2 < best) {
+                    best = r2;
+                    bp = (long)p;
+                    speed = sqrt(s2);
+                }
+            }
             w->failed = 1;
             return sm_world_fail(w, SM_ERR_NUMERICAL,
-                                 "step %llu (t = %.6g s, dt = %.3g s): grid node (%d, %d, %d) has a non-finite velocity; "
-                                 "particle state is that of the last good step",
-                                 (unsigned long long)w->steps + 1, w->time, dt, ijk[0], ijk[1], ijk[2]);
+                                 "step %llu (t = %.6g s, dt = %.3g s): grid node (%d, %d, %d) got a non-finite velocity; "
+                                 "nearest particle %ld (material %d, speed %.3g m/s); particle state is that of the last good step",
+                                 (unsigned long long)w->steps + 1, w->time, dt, ijk[0], ijk[1], ijk[2], bp,
+                                 bp >= 0 ? (int)w->p.mat[bp] : -1, speed);
         }
         t0 = sm_seconds();
         w->ops->g2p(w, &c);
@@ -567,7 +613,7 @@ sm_status sm_world_step(sm_world *w, double dt) {
         w->ops->plasticity(w, &c, 0);
         t0 = sm_seconds();
         w->stage_seconds[SM_STAGE_PLASTICITY] += t0 - t1;
-        long badp = first_bad_particle(w);
+        long badp = first_bad_particle(w, 0, &fast);
         if (badp >= 0) {
             w->failed = 1;
             return sm_world_fail(w, SM_ERR_NUMERICAL,
@@ -653,6 +699,7 @@ void sm_world_diagnostics(const sm_world *w, sm_diagnostics *o) {
     o->max_dt = w->max_dt;
     for (int s = 0; s < SM_STAGE_COUNT; s++) o->stage_seconds[s] = w->stage_seconds[s];
     o->clamped_particles = w->clamped;
+    o->projected_particles = w->projected;
 }
 
 void sm_world_reset_step_stats(sm_world *w) {

@@ -94,6 +94,7 @@ struct sm_world {
     double last_dt, min_dt, max_dt;
     double stage_seconds[SM_STAGE_COUNT];
     uint64_t clamped;
+    uint64_t projected;
     int threads;
     int failed;             /* a numerical failure stopped the world */
 

@@ -81,7 +81,7 @@ typedef enum sm_integrator {
 
 /** Collision behaviour of a collider or the domain walls (thesis §3.6.3, Algorithm 7). */
 typedef enum sm_collide_mode {
-    SM_COLLIDE_STICKY = 0,  /**< no-slip: grid nodes inside take the collider's velocity */
+    SM_COLLIDE_STICKY = 0,  /**< no-slip: grid nodes inside, or arriving inside, take the collider's velocity */
     SM_COLLIDE_SLIP = 1,    /**< nodes inside keep their depth, slide tangentially */
     SM_COLLIDE_SEPARATE = 2 /**< nodes may leave the surface but not penetrate (or go deeper) */
 } sm_collide_mode;
@@ -108,6 +108,10 @@ typedef struct sm_world_def {
                                      sticky. 0: positions and F always use the pre-friction velocities, exactly
                                      as thesis §3.6.5; that lets a block creep down an incline at a speed of
                                      about g sin(theta) dt M / m_contact even when mu > tan(theta). */
+    int particle_projection; /**< 1 (default): a particle that ends a step inside a collider is moved back to
+                                  its surface (position only; counted in diagnostics). Collisions are still
+                                  resolved on the grid (§3.6.3); this only catches the small residual
+                                  penetration the kernel's smoothing allows. 0: off, as in the thesis. */
     int threads;             /**< OpenMP threads; 0 = OpenMP's default. Results do not depend on it. */
     size_t max_particles;    /**< refuse to grow beyond this many particles; 0 = no limit. */
 } sm_world_def;
@@ -336,7 +340,8 @@ typedef struct sm_diagnostics {
     double last_dt;               /**< s */
     double min_dt, max_dt;        /**< smallest and largest step since the last sm_world_reset_step_stats */
     double stage_seconds[SM_STAGE_COUNT]; /**< wall time per stage since creation */
-    uint64_t clamped_particles;   /**< particles pushed back inside the domain by the safety clamp */
+    uint64_t clamped_particles;   /**< particle-steps pushed back inside the domain by the safety clamp */
+    uint64_t projected_particles; /**< particle-steps moved out of a collider (particle_projection) */
 } sm_diagnostics;
 
 /** Computes the diagnostics (O(n)). */

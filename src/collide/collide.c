@@ -364,7 +364,7 @@ void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3],
         double phi0 = sm_collider_phi(c, dim, 0, xi, NULL);
         sm_collide_mode mode = c->def.mode;
         if (mode == SM_COLLIDE_STICKY) {
-            if (phi0 < 0.0) {
+            if (phi0 < 0.0 || sm_collider_phi(c, dim, 1, xhat, NULL) < 0.0) {
                 rec->sticky = b;
                 sm_collider_velocity(c, dim, xhat, v);
             }

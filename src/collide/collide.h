@@ -54,7 +54,11 @@ typedef struct sm_node_contact {
 } sm_node_contact;
 
 /* GRID_COLLISIONS for one node at position xi (3 comps) with velocity v (in: v*, out: v-bar),
- * over all nc colliders in order, as Algorithm 7. rec receives the contacts (always written). */
+ * over all nc colliders in order, as Algorithm 7. rec receives the contacts (always written).
+ * One deliberate extension: a sticky collider also sticks a node that is outside at t^n but would
+ * be inside at t^{n+1} (phi_1(x-hat) < 0), so no-slip ground is not penetrated by nodes arriving
+ * from above (Algorithm 7 only sticks nodes already inside; that let a collapsing column sink
+ * about 0.7 dx into a sticky ground). */
 void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3], double dt,
                      double v[3], sm_node_contact *rec);
 

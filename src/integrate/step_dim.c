@@ -377,21 +377,44 @@ static inline __attribute__((always_inline)) size_t g2p_one(sm_world *w, const s
         }
         P->x[p * D + a] = xa;
     }
+    /* Safety net: a particle that ends a step inside a collider is put back on its surface along
+     * the gradient (positions only). The grid-level constraints above keep this rare and small;
+     * it is counted in sm_diagnostics.projected_particles. */
+    if (w->def.particle_projection) {
+        for (int b = 0; b < w->ncolliders; b++) {
+            double xp[3] = {0, 0, 0}, gr[3];
+            for (int a = 0; a < D; a++) xp[a] = (double)P->x[p * D + a];
+            double phi = sm_collider_phi(&w->colliders[b], D, 1, xp, gr);
+            if (phi < 0) {
+                for (int a = 0; a < D; a++) P->x[p * D + a] = (sm_real)(xp[a] - phi * gr[a]);
+                clamped |= 2;
+            }
+        }
+    }
     return clamped;
 }
 
 static void SM_FN(g2p)(sm_world *w, const sm_step_ctx *c) {
     const int S = stencil_size(w);
     const long n = (long)w->p.n;
-    unsigned long long clamped = 0;
+    unsigned long long clamped = 0, projected = 0;
     if (S == 3) {
-#pragma omp parallel for schedule(static) reduction(+ : clamped) num_threads(c->threads)
-        for (long i = 0; i < n; i++) clamped += g2p_one(w, c, 3, w->perm[i]);
+#pragma omp parallel for schedule(static) reduction(+ : clamped, projected) num_threads(c->threads)
+        for (long i = 0; i < n; i++) {
+            size_t r = g2p_one(w, c, 3, w->perm[i]);
+            clamped += r & 1;
+            projected += r >> 1;
+        }
     } else {
-#pragma omp parallel for schedule(static) reduction(+ : clamped) num_threads(c->threads)
-        for (long i = 0; i < n; i++) clamped += g2p_one(w, c, 4, w->perm[i]);
+#pragma omp parallel for schedule(static) reduction(+ : clamped, projected) num_threads(c->threads)
+        for (long i = 0; i < n; i++) {
+            size_t r = g2p_one(w, c, 4, w->perm[i]);
+            clamped += r & 1;
+            projected += r >> 1;
+        }
     }
     w->clamped += clamped;
+    w->projected += projected;
 }
 
 /* ------------------------------------------------------------------------------------------ */

@@ -20,7 +20,8 @@
  *                (3.80) misplaces it)
  *
  * Case III is evaluated in the algebraically identical form
- *   H = tr(eps)/d I + (1 - dgamma/||dev eps||) dev eps,  1 - dgamma/||dev eps|| = -(d lambda + 2 mu) tr(eps) alpha / (2 mu ||dev eps||),
+ *   H = tr(eps)/d I + (1 - dgamma/||dev eps||) dev eps,
+ *   1 - dgamma/||dev eps|| = -(d lambda + 2 mu) tr(eps) alpha / (2 mu ||dev eps||),
  * so that the result lies on the cone (y = 0) to rounding and its deviator is exactly parallel to
  * the trial one.
  *

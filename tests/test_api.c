@@ -1,0 +1,180 @@
+/* The public API's contract: bad input gives SM_ERR_INVALID and a message naming the field and
+ * value; NaN/Inf in particle state stops the step with SM_ERR_NUMERICAL and a message naming the
+ * step and the particle (DESIGN §5 tier 3); adaptive dt obeys its bounds and lands exactly on the
+ * target time; diagnostics match known values (mass, angular momentum of a spinning disk). */
+#include <string.h>
+
+#include "test_util.h"
+#include "sandmpm/sandmpm.h"
+
+#define SM_PI_TEST 3.14159265358979323846
+
+#define CHECK_MSG(msg, sub)                                                                       \
+    do {                                                                                          \
+        int ok_ = strstr((msg), (sub)) != NULL;                                                   \
+        if (!ok_) fprintf(stderr, "message \"%s\" lacks \"%s\"\n", (msg), (sub));                 \
+        CHECK(ok_);                                                                               \
+    } while (0)
+
+static sm_world *small_world(int dim) {
+    sm_world_def def = sm_world_def_default();
+    def.dim = dim;
+    def.dx = 0.05;
+    sm_world *w = NULL;
+    char err[256];
+    if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) return NULL;
+    return w;
+}
+
+int main(void) {
+    char err[256];
+    sm_world *w = NULL;
+    /* --- creation errors --- */
+    sm_world_def def = sm_world_def_default();
+    def.dim = 4;
+    CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_ERR_INVALID);
+    CHECK(w == NULL);
+    CHECK_MSG(err, "dim: must be 2 or 3, got 4");
+    def = sm_world_def_default();
+    def.dx = -1;
+    CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_ERR_INVALID);
+    CHECK_MSG(err, "dx: must be > 0, got -1");
+    def = sm_world_def_default();
+    def.dx = NAN;
+    CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_ERR_INVALID);
+    CHECK_MSG(err, "dx");
+    def = sm_world_def_default();
+    def.domain_max[1] = -1;
+    CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_ERR_INVALID);
+    CHECK_MSG(err, "domain");
+    def = sm_world_def_default();
+    def.cfl = 2;
+    CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_ERR_INVALID);
+    CHECK_MSG(err, "cfl: must be in (0, 1], got 2");
+    def = sm_world_def_default();
+    def.integrator = SM_INTEGRATOR_IMPLICIT;
+    CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_ERR_INVALID);
+    CHECK_MSG(err, "implicit");
+    sm_world_destroy(NULL); /* accepted */
+
+    for (int dim = 2; dim <= 3; dim++) {
+        w = small_world(dim);
+        CHECK(w != NULL);
+        if (!w) continue;
+        /* --- material errors --- */
+        sm_material_def m = sm_material_def_sand();
+        m.youngs_modulus = -5;
+        CHECK(sm_world_add_material(w, &m) == -1);
+        CHECK_MSG(sm_world_errmsg(w), "E: must be > 0, got -5");
+        m = sm_material_def_sand();
+        m.poisson_ratio = 0.5;
+        CHECK(sm_world_add_material(w, &m) == -1);
+        CHECK_MSG(sm_world_errmsg(w), "nu");
+        m = sm_material_def_sand();
+        m.h3 = 40; /* h0 > h3 required */
+        CHECK(sm_world_add_material(w, &m) == -1);
+        CHECK_MSG(sm_world_errmsg(w), "h0 > h3");
+        m = sm_material_def_sand();
+        m.hardening = 0;
+        m.friction_angle = 95;
+        CHECK(sm_world_add_material(w, &m) == -1);
+        CHECK_MSG(sm_world_errmsg(w), "friction_angle");
+        m = sm_material_def_sand();
+        int sand = sm_world_add_material(w, &m);
+        CHECK(sand == 0);
+        /* --- particle and collider errors --- */
+        double far[3] = {5, 0.5, 0.5};
+        CHECK(sm_world_add_particles(w, 1, far, NULL, sand, 8) == SM_ERR_INVALID);
+        CHECK_MSG(sm_world_errmsg(w), "outside the usable domain");
+        double ok[3] = {0.5, 0.5, 0.5};
+        CHECK(sm_world_add_particles(w, 1, ok, NULL, 7, 8) == SM_ERR_INVALID);
+        CHECK_MSG(sm_world_errmsg(w), "material: unknown id 7");
+        sm_collider_def c = sm_collider_def_default();
+        CHECK(sm_world_add_collider(w, &c) == -1);
+        CHECK_MSG(sm_world_errmsg(w), "shapes");
+        c.shape_count = 1;
+        c.shapes[0] = sm_shape_default(SM_SHAPE_SPHERE);
+        c.shapes[0].radius = -1;
+        CHECK(sm_world_add_collider(w, &c) == -1);
+        CHECK_MSG(sm_world_errmsg(w), "radius: must be > 0, got -1");
+        c.shapes[0].radius = 0.1;
+        c.friction = -0.5;
+        CHECK(sm_world_add_collider(w, &c) == -1);
+        CHECK_MSG(sm_world_errmsg(w), "friction");
+        CHECK(sm_world_step(w, -1) == SM_ERR_INVALID);
+
+        /* --- a spinning disk / ball: mass and angular momentum --- */
+        sm_shape s = sm_shape_default(SM_SHAPE_SPHERE);
+        s.center[0] = s.center[1] = s.center[2] = 0.5;
+        s.radius = 0.2;
+        sm_seed_def sd = sm_seed_def_default();
+        sd.material = sand;
+        sd.ppc = dim == 2 ? 16 : 27;
+        sd.angular_velocity[2] = 2.0;
+        size_t added = 0;
+        CHECK(sm_world_seed_shape(w, &s, &sd, &added) == SM_OK);
+        sm_diagnostics d;
+        sm_world_diagnostics(w, &d);
+        double vol = dim == 2 ? SM_PI_TEST * 0.04 : 4.0 / 3.0 * SM_PI_TEST * 0.008;
+        double mass = 2200 * vol;
+        CHECK_REL(d.total_mass, mass, 0.03, 0);
+        /* I_z = m r^2 / 2 (disk) or 2/5 m r^2 (ball); L_z = I w (about the centre = about origin + COM x P, P = 0) */
+        double I = dim == 2 ? 0.5 * d.total_mass * 0.04 : 0.4 * d.total_mass * 0.04;
+        CHECK_REL(d.angular_momentum[2], I * 2.0, 0.05, 0);
+        CHECK_NEAR(d.momentum[0], 0, 1e-9 * d.total_mass + 1e-6);
+        CHECK_REL(d.kinetic_energy, 0.5 * I * 4.0, 0.05, 0);
+        CHECK_NEAR(d.elastic_energy, 0, 1e-9);
+
+        /* --- adaptive dt bounds and exact landing --- */
+        double dt = sm_world_next_dt(w, 10);
+        double c_wave = sqrt((2 * 3.537e5 * 0.7 / (1.3 * 0.4)) / 2200); /* sqrt((lambda + 2 mu)/rho) */
+        CHECK(dt <= 1e-3 * (1 + 1e-12));
+        CHECK(dt <= 0.5 * 0.05 / c_wave * (1 + 1e-9));
+        CHECK(dt <= 1.0 * 0.05 / d.max_speed * (1 + 1e-9));
+        CHECK(sm_world_advance(w, 0.0123) == SM_OK);
+        CHECK(sm_world_time(w) == 0.0123);
+        CHECK(sm_world_advance(w, 0.02) == SM_OK);
+        CHECK(sm_world_time(w) == 0.02);
+        sm_world_diagnostics(w, &d);
+        CHECK(d.steps > 0);
+        CHECK(d.min_dt > 0 && d.min_dt <= d.max_dt);
+
+        /* --- NaN in particle state: stops with the step and particle named --- */
+        uint64_t before = sm_world_state_hash(w);
+        unsigned long long step_no = (unsigned long long)d.steps + 1;
+        sm_real *v = sm_world_particle_velocities(w);
+        v[7 * dim + 1] = (sm_real)NAN;
+        CHECK(sm_world_step(w, 1e-4) == SM_ERR_NUMERICAL);
+        char want[64];
+        snprintf(want, sizeof want, "step %llu", step_no);
+        CHECK_MSG(sm_world_errmsg(w), want);
+        CHECK_MSG(sm_world_errmsg(w), "particle 7");
+        printf("%dD NaN message: %s\n", dim, sm_world_errmsg(w));
+        v[7 * dim + 1] = 0;
+        CHECK(sm_world_step(w, 1e-4) == SM_ERR_NUMERICAL); /* the world stays stopped */
+        CHECK_MSG(sm_world_errmsg(w), "stopped");
+        v[7 * dim + 1] = (sm_real)NAN;
+        CHECK(sm_world_state_hash(w) != before); /* (the NaN we wrote is in the state) */
+        sm_world_destroy(w);
+
+        /* --- an overflow inside the step (finite state, huge velocity): the grid check --- */
+        w = small_world(dim);
+        sand = sm_world_add_material(w, &m);
+        CHECK(sm_world_seed_shape(w, &s, &sd, &added) == SM_OK);
+        v = sm_world_particle_velocities(w);
+#if SM_DOUBLE
+        v[3 * dim] = (sm_real)1e300;
+        v[3 * dim + 1] = (sm_real)1e300;
+#else
+        v[3 * dim] = (sm_real)1e38;
+        v[3 * dim + 1] = (sm_real)1e38;
+#endif
+        sm_status st = sm_world_step(w, 1e-4);
+        CHECK(st == SM_ERR_NUMERICAL);
+        CHECK_MSG(sm_world_errmsg(w), "step 1");
+        CHECK_MSG(sm_world_errmsg(w), "particle");
+        printf("%dD overflow message: %s\n", dim, sm_world_errmsg(w));
+        sm_world_destroy(w);
+    }
+    return sm_test_summary("test_api");
+}

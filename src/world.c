@@ -33,7 +33,7 @@ const char *sm_version(void) { return SM_VERSION_STRING; }
 int sm_real_is_double(void) { return SM_DOUBLE; }
 
 const char *sm_stage_name(sm_stage s) {
-    static const char *names[SM_STAGE_COUNT] = {"dt", "sort", "p2g", "grid", "collide", "g2p", "plasticity"};
+    static const char *names[SM_STAGE_COUNT] = {"dt", "sort", "p2g", "grid", "g2p", "plasticity", "checks"};
     return (s >= 0 && s < SM_STAGE_COUNT) ? names[s] : "?";
 }
 
@@ -548,6 +548,9 @@ sm_status sm_world_step(sm_world *w, double dt) {
         double t0 = sm_seconds(), t1;
         int fast = 0;
         long pre = first_bad_particle(w, dt, &fast);
+        t1 = sm_seconds();
+        w->stage_seconds[SM_STAGE_CHECKS] += t1 - t0;
+        t0 = t1;
         if (pre >= 0) {
             w->failed = 1;
             if (fast) {
@@ -579,6 +582,9 @@ sm_status sm_world_step(sm_world *w, double dt) {
         t1 = sm_seconds();
         w->stage_seconds[SM_STAGE_GRID] += t1 - t0;
         long bad = w->ops->grid_check(w);
+        t0 = sm_seconds();
+        w->stage_seconds[SM_STAGE_CHECKS] += t0 - t1;
+        t1 = t0;
         if (bad >= 0) {
             int ijk[3];
             sm_grid_node_coords(&w->grid, (size_t)bad, ijk);
@@ -614,6 +620,7 @@ sm_status sm_world_step(sm_world *w, double dt) {
         t0 = sm_seconds();
         w->stage_seconds[SM_STAGE_PLASTICITY] += t0 - t1;
         long badp = first_bad_particle(w, 0, &fast);
+        w->stage_seconds[SM_STAGE_CHECKS] += sm_seconds() - t0;
         if (badp >= 0) {
             w->failed = 1;
             return sm_world_fail(w, SM_ERR_NUMERICAL,

@@ -8,8 +8,12 @@
 
 #if SM_DOUBLE
 #define RTOL 1e-9
+#define ULP_X 0.0
 #else
-#define RTOL 2e-5
+/* In float, positions near 0.5 m carry an ulp of 6e-8 m and every step rounds x + dt v: the error
+ * grows by up to about one ulp per step, so float gets an absolute allowance per step. */
+#define RTOL 1e-4
+#define ULP_X 6e-8
 #endif
 
 static void run(int dim, sm_kernel kernel) {
@@ -54,10 +58,10 @@ static void run(int dim, sm_kernel kernel) {
         t += dt;
         steps++;
         sm_world_diagnostics(w, &d);
-        double e = fabs(d.center_of_mass[1] - y) / fabs(y - y0);
+        double e = fabs(d.center_of_mass[1] - y) / fmax(fabs(y - y0), 1e-12);
         if (e > worst) worst = e;
-        CHECK_REL(d.center_of_mass[1] - y0, y - y0, RTOL, 1e-3);
-        CHECK_REL(d.center_of_mass[0] - x0, x - x0, RTOL, 1e-3);
+        CHECK_NEAR(d.center_of_mass[1] - y0, y - y0, RTOL * fabs(y - y0) + ULP_X * (n + 1) + 1e-15);
+        CHECK_NEAR(d.center_of_mass[0] - x0, x - x0, RTOL * fabs(x - x0) + ULP_X * (n + 1) + 1e-15);
         CHECK_REL(d.momentum[1], d.total_mass * vy, RTOL, d.total_mass * 0.1);
     }
     /* Discrete vs exact: y_disc - y_exact = g dt t / 2 for a constant dt (here max_dt). */

@@ -297,13 +297,13 @@ void sm_world_collider_pose(const sm_world *w, int id, sm_pose *pose);
 
 /** Stages of one step, timed into sm_diagnostics.stage_seconds. */
 typedef enum sm_stage {
-    SM_STAGE_DT = 0,
-    SM_STAGE_SORT,
-    SM_STAGE_P2G,
-    SM_STAGE_GRID,
-    SM_STAGE_COLLIDE,
-    SM_STAGE_G2P,
-    SM_STAGE_PLASTICITY,
+    SM_STAGE_DT = 0,     /**< choosing dt (max particle speed) */
+    SM_STAGE_SORT,       /**< binning particles by grid block, activating and clearing grid blocks */
+    SM_STAGE_P2G,        /**< particle to grid: mass, momentum, internal force */
+    SM_STAGE_GRID,       /**< grid velocity update, colliders, friction, domain walls */
+    SM_STAGE_G2P,        /**< grid to particle: velocity, B, position, F */
+    SM_STAGE_PLASTICITY, /**< SVD, return mapping, hardening, next step's stress */
+    SM_STAGE_CHECKS,     /**< NaN/Inf and CFL checks of particle and grid state */
     SM_STAGE_COUNT
 } sm_stage;
 

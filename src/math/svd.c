@@ -152,18 +152,12 @@ void sm_svd2(const sm_real F[4], sm_real U[4], sm_real sigma[2], sm_real V[4]) {
  * are A_rp, A_rq), accumulated into the columns p, q of V (row-major). */
 static inline void svd3_jacobi(sm_real *app, sm_real *aqq, sm_real *apq, sm_real *arp,
                                sm_real *arq, sm_real V[9], int p, int q) {
-    sm_real pp = *app, qq = *apq, rr = *aqq;
-    sm_real d = rr - pp;
-    sm_real rho = sm_sqrt(d * d + 4 * qq * qq);
-    sm_real w = sm_fabs(d) + rho + SVD_REAL_MIN;
-    sm_real keep = (sm_real)(qq * qq > SVD_EPS2 * pp * rr);
-    sm_real inv = SVD_ONE / (w * (2 * rho + SVD_REAL_MIN));
-    sm_real t = keep * (2 * qq * svd_copysign(SVD_ONE, d)) * (2 * rho + SVD_REAL_MIN) * inv;
-    sm_real c = sm_sqrt(svd_sel(keep, w * w * inv, SVD_ONE));
+    sm_real t = svd_jacobi_t(*app, *apq, *aqq);
+    sm_real c = SVD_ONE / sm_sqrt(SVD_ONE + t * t);
     sm_real s = t * c;
     sm_real rp = *arp, rq = *arq;
-    *app = pp - t * qq;
-    *aqq = rr + t * qq;
+    *app -= t * *apq;
+    *aqq += t * *apq;
     *apq = 0;
     *arp = c * rp - s * rq;
     *arq = s * rp + c * rq;

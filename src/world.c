@@ -173,12 +173,27 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
     return SM_OK;
 }
 
+size_t sm_world_def_grid_bytes(const sm_world_def *def) {
+    if (!def || (def->dim != 2 && def->dim != 3) || !(def->dx > 0)) return 0;
+    double blocks = 1;
+    for (int a = 0; a < def->dim; a++) {
+        double len = def->domain_max[a] - def->domain_min[a];
+        if (!(len > 0)) return 0;
+        double nodes = ceil(len / def->dx - 1e-9) + 1;
+        blocks *= ceil(nodes / SM_BLOCK);
+    }
+    double nodes = blocks * (def->dim == 2 ? SM_BLOCK * SM_BLOCK : SM_BLOCK * SM_BLOCK * SM_BLOCK);
+    double bytes = nodes * (double)sizeof(sm_real) * (1 + 3 * def->dim) + blocks * (1 + 3 * sizeof(uint32_t) + 4);
+    return bytes > 1e18 ? (size_t)-1 : (size_t)bytes;
+}
+
 void sm_world_destroy(sm_world *w) {
     if (!w) return;
     sm_particles_free(&w->p);
     sm_grid_free(&w->grid);
     free(w->mats);
     free(w->colliders);
+    free(w->emitters);
     free(w->keys);
     free(w->perm);
     free(w->block_start);
@@ -630,6 +645,10 @@ sm_status sm_world_step(sm_world *w, double dt) {
         }
     }
     for (int i = 0; i < w->ncolliders; i++) sm_collider_end_step(&w->colliders[i]);
+    if (w->nemitters > 0) {
+        sm_status est = sm_world_run_emitters(w, w->time, w->time + dt);
+        if (est != SM_OK) return est;
+    }
     w->time += dt;
     w->steps++;
     w->last_dt = dt;

@@ -29,6 +29,15 @@ typedef struct sm_particles {
     uint16_t *mat;
 } sm_particles;
 
+/* An emitter and its bookkeeping. */
+typedef struct sm_emitter {
+    sm_emitter_def def;
+    double bmin[3], bmax[3];  /* sampling box */
+    double particle_mass;     /* kg */
+    double owed;              /* mass due but not yet emitted, kg */
+    uint64_t emitted;         /* particles emitted so far */
+} sm_emitter;
+
 /* Per-step context (DESIGN §3): what the stages need, so the world holds no per-step scratch. */
 typedef struct sm_step_ctx {
     double dt;
@@ -78,6 +87,9 @@ struct sm_world {
     sm_collider *colliders;
     int ncolliders, colliders_cap;
 
+    sm_emitter *emitters;
+    int nemitters, emitters_cap;
+
     sm_grid grid;
 
     /* Binning scratch, grown as needed, never shrunk. */
@@ -107,6 +119,9 @@ sm_status sm_world_fail(sm_world *w, sm_status status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+
+/* Runs the emitters for the step [t0, t1]. */
+sm_status sm_world_run_emitters(sm_world *w, double t0, double t1);
 
 /* Grows particle storage to hold at least n particles. */
 sm_status sm_particles_reserve(sm_particles *p, int dim, size_t n);

@@ -253,6 +253,42 @@ sm_real *sm_world_particle_velocities(sm_world *w);
 /** Friction angle in degrees of particle i (from its material and q). */
 double sm_world_particle_friction_angle(const sm_world *w, size_t i);
 
+/** Estimated volume (m^3, or m^2 in 2D) of shape ∩ clip ∩ [lo, hi] by sampling a 64^d lattice of
+ *  its bounding box; used to estimate particle counts (volume * ppc / dx^d) before seeding. */
+double sm_shape_volume_estimate(const sm_shape *shape, const sm_shape *clip, int dim, const double lo[3],
+                                const double hi[3]);
+
+/** Bytes per particle held by the library (state and per-step scratch), for memory estimates. */
+size_t sm_particle_bytes(int dim);
+
+/** Bytes the grid of a world created from def would allocate (0 if def is invalid). */
+size_t sm_world_def_grid_bytes(const sm_world_def *def);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Emitters                                                                                     */
+
+/** A particle source: emits particles uniformly at random inside `shape` at a mass flow rate,
+ *  between `start` and `stop` (s). Each particle has V0 = dx^d/ppc, mass rho V0, the given
+ *  velocity, and is undeformed. Emission is deterministic (counter-based RNG from `seed`). */
+typedef struct sm_emitter_def {
+    sm_shape shape;       /**< where particles appear (must be inside the usable domain) */
+    int material;         /**< material id */
+    double ppc;           /**< sets the particle volume, V0 = dx^d/ppc (> 0) */
+    double velocity[3];   /**< initial velocity, m/s */
+    double rate;          /**< mass flow rate, kg/s (kg/(m s) in 2D) (> 0) */
+    double start, stop;   /**< active time interval, s (stop > start) */
+    uint64_t seed;        /**< RNG seed */
+} sm_emitter_def;
+
+sm_emitter_def sm_emitter_def_default(void);
+
+/** Adds an emitter; returns its id (>= 0) or -1 with a message. Emitters run at the end of each
+ *  step (after plasticity), adding the mass that flowed during the step (fractions carry over). */
+int sm_world_add_emitter(sm_world *w, const sm_emitter_def *e);
+
+/** Total mass emitted so far by emitter id (kg). */
+double sm_world_emitted_mass(const sm_world *w, int id);
+
 /* ------------------------------------------------------------------------------------------ */
 /* Colliders                                                                                    */
 

@@ -1,0 +1,152 @@
+/* Emitters: particle sources with a mass flow rate (thesis §4.1.2, pile from spout).
+ *
+ * At the end of each step an active emitter owes rate * (overlap of the step with [start, stop])
+ * kilograms; it adds floor(owed / m_p) particles, each at a uniformly random point of its shape
+ * (rejection sampling in the shape's bounding box), and carries the remainder to the next step, so
+ * the emitted mass follows rate * t to within one particle. Points come from a counter-based RNG of
+ * (seed, emitted count): the result does not depend on step sizes' history or thread count. */
+#include <string.h>
+
+#include "core/hash.h"
+#include "world_internal.h"
+
+sm_emitter_def sm_emitter_def_default(void) {
+    sm_emitter_def e;
+    memset(&e, 0, sizeof e);
+    e.shape = sm_shape_default(SM_SHAPE_SPHERE);
+    e.ppc = 8;
+    e.rate = 1;
+    e.start = 0;
+    e.stop = INFINITY;
+    e.seed = 1;
+    return e;
+}
+
+/* Bounding box of a finite shape (conservative), clipped to [lo, hi]. Returns 0 for unbounded. */
+static int emitter_bounds(const sm_shape *s, int dim, const double lo[3], const double hi[3], double bmin[3],
+                          double bmax[3]) {
+    double r = 0;
+    switch (s->kind) {
+    case SM_SHAPE_SPHERE: r = s->radius; break;
+    case SM_SHAPE_BOX:
+        r = sqrt(s->half_extent[0] * s->half_extent[0] + s->half_extent[1] * s->half_extent[1] +
+                 (dim == 3 ? s->half_extent[2] * s->half_extent[2] : 0));
+        break;
+    case SM_SHAPE_CYLINDER: r = sqrt(s->radius * s->radius + s->half_height * s->half_height); break;
+    default: return 0;
+    }
+    if (s->inside_out) return 0;
+    for (int a = 0; a < 3; a++) {
+        bmin[a] = a < dim ? fmax(lo[a], s->center[a] - r) : 0;
+        bmax[a] = a < dim ? fmin(hi[a], s->center[a] + r) : 0;
+    }
+    for (int a = 0; a < dim; a++)
+        if (!(bmax[a] > bmin[a])) return 0;
+    return 1;
+}
+
+int sm_world_add_emitter(sm_world *w, const sm_emitter_def *e) {
+    if (!e) return (sm_world_fail(w, SM_ERR_INVALID, "emitter definition is NULL"), -1);
+    if (e->material < 0 || e->material >= w->nmats)
+        return (sm_world_fail(w, SM_ERR_INVALID, "emitter material: unknown id %d (%d defined)", e->material, w->nmats), -1);
+    if (!(e->ppc > 0) || !isfinite(e->ppc)) return (sm_world_fail(w, SM_ERR_INVALID, "emitter ppc: must be > 0, got %g", e->ppc), -1);
+    if (!(e->rate > 0) || !isfinite(e->rate)) return (sm_world_fail(w, SM_ERR_INVALID, "emitter rate: must be > 0, got %g", e->rate), -1);
+    if (!isfinite(e->start) || !(e->stop > e->start))
+        return (sm_world_fail(w, SM_ERR_INVALID, "emitter: need a finite start and stop > start, got %g .. %g", e->start, e->stop), -1);
+    for (int a = 0; a < 3; a++)
+        if (!isfinite(e->velocity[a])) return (sm_world_fail(w, SM_ERR_INVALID, "emitter velocity: must be finite"), -1);
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}, bmin[3], bmax[3];
+    for (int a = 0; a < w->dim; a++) {
+        lo[a] = w->def.domain_min[a] + 2 * w->def.dx;
+        hi[a] = w->def.domain_max[a] - 2 * w->def.dx;
+    }
+    if (!emitter_bounds(&e->shape, w->dim, lo, hi, bmin, bmax))
+        return (sm_world_fail(w, SM_ERR_INVALID, "emitter shape: must be a sphere, box or cylinder (not inside-out) inside the domain"), -1);
+    if (!(sm_shape_volume_estimate(&e->shape, NULL, w->dim, lo, hi) > 0))
+        return (sm_world_fail(w, SM_ERR_INVALID, "emitter shape: has no volume inside the usable domain"), -1);
+    if (w->nemitters == w->emitters_cap) {
+        int cap = w->emitters_cap ? 2 * w->emitters_cap : 4;
+        sm_emitter *q = realloc(w->emitters, (size_t)cap * sizeof *q);
+        if (!q) return (sm_world_fail(w, SM_ERR_NOMEM, "out of memory"), -1);
+        w->emitters = q;
+        w->emitters_cap = cap;
+    }
+    sm_emitter *em = &w->emitters[w->nemitters];
+    memset(em, 0, sizeof *em);
+    em->def = *e;
+    memcpy(em->bmin, bmin, sizeof bmin);
+    memcpy(em->bmax, bmax, sizeof bmax);
+    em->particle_mass = pow(w->def.dx, w->dim) / e->ppc * w->mats[e->material].def.density;
+    return w->nemitters++;
+}
+
+double sm_world_emitted_mass(const sm_world *w, int id) {
+    if (id < 0 || id >= w->nemitters) return 0;
+    return (double)w->emitters[id].emitted * w->emitters[id].particle_mass;
+}
+
+sm_status sm_world_run_emitters(sm_world *w, double t0, double t1) {
+    for (int k = 0; k < w->nemitters; k++) {
+        sm_emitter *em = &w->emitters[k];
+        const sm_emitter_def *e = &em->def;
+        double a = fmax(t0, e->start), b = fmin(t1, e->stop);
+        if (!(b > a)) continue;
+        em->owed += e->rate * (b - a);
+        size_t count = (size_t)floor(em->owed / em->particle_mass);
+        if (count == 0) continue;
+        em->owed -= (double)count * em->particle_mass;
+        double *pos = malloc(count * 3 * sizeof(double)), *vel = malloc(count * 3 * sizeof(double));
+        if (!pos || !vel) {
+            free(pos);
+            free(vel);
+            return sm_world_fail(w, SM_ERR_NOMEM, "emitter %d: out of memory", k);
+        }
+        for (size_t i = 0; i < count; i++) {
+            double x[3] = {0, 0, 0};
+            for (int tries = 0;; tries++) {
+                uint64_t key = sm_mix64(e->seed ^ sm_mix64(em->emitted * 1024 + (uint64_t)tries));
+                for (int d = 0; d < w->dim; d++) {
+                    key = sm_mix64(key + (uint64_t)d + 1);
+                    x[d] = em->bmin[d] + sm_u01(key) * (em->bmax[d] - em->bmin[d]);
+                }
+                if (sm_shape_distance(&e->shape, w->dim, x, NULL) < 0 || tries > 1000) break;
+            }
+            em->emitted++;
+            memcpy(pos + 3 * i, x, sizeof x);
+            memcpy(vel + 3 * i, e->velocity, 3 * sizeof(double));
+        }
+        size_t first = w->p.n;
+        sm_status st = sm_world_add_particles(w, count, pos, vel, e->material, e->ppc);
+        free(pos);
+        free(vel);
+        if (st != SM_OK) return st;
+        sm_world_init_stress(w, first);
+    }
+    return SM_OK;
+}
+
+double sm_shape_volume_estimate(const sm_shape *shape, const sm_shape *clip, int dim, const double lo[3],
+                                const double hi[3]) {
+    const int N = 64;
+    double h[3] = {0, 0, 0}, cell = 1;
+    for (int a = 0; a < dim; a++) {
+        if (!(hi[a] > lo[a])) return 0;
+        h[a] = (hi[a] - lo[a]) / N;
+        cell *= h[a];
+    }
+    size_t inside = 0;
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < N; j++)
+            for (int k = 0; k < (dim == 3 ? N : 1); k++) {
+                double x[3] = {lo[0] + (i + 0.5) * h[0], lo[1] + (j + 0.5) * h[1], dim == 3 ? lo[2] + (k + 0.5) * h[2] : 0};
+                if (sm_shape_distance(shape, dim, x, NULL) < 0 && (!clip || sm_shape_distance(clip, dim, x, NULL) < 0))
+                    inside++;
+            }
+    return (double)inside * cell;
+}
+
+size_t sm_particle_bytes(int dim) {
+    size_t d = (size_t)dim, dd = d * d;
+    /* x, v, B, F, tau, mass, vol0, q, alpha; material id; sort key and permutation */
+    return sizeof(sm_real) * (2 * d + 3 * dd + 4) + sizeof(uint16_t) + 2 * sizeof(uint32_t);
+}

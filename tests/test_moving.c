@@ -48,7 +48,7 @@ static void seed_block(sm_world *w, int dim, int mat, double y0) {
 int main(void) {
     for (int dim = 2; dim <= 3; dim++) {
         /* (1) conveyor */
-        int mat;
+        int mat = 0;
         sm_world *w = world(dim, &mat, 0);
         sm_collider_def g = sm_collider_def_default();
         g.shape_count = 1;

@@ -44,16 +44,31 @@ typedef struct weights {
     int base[D];
     sm_real w[D][4];
     sm_real dw[D][4]; /* derivative w.r.t. position (already times 1/dx) */
-    sm_real X[D];     /* position in grid units relative to node 0 */
+    sm_real dp[D][4]; /* x_i - x_p per axis, m */
+    size_t off[D][4]; /* per-axis part of the node index: index = off[0][s0] + off[1][s1] (+ off[2][s2]) */
 } weights;
 
-static inline __attribute__((always_inline)) void kernel_weights(int S, const sm_real *xp,
-                                                                 const sm_step_ctx *c, weights *W) {
+/* The block-major node index separates into a sum of per-axis terms (see grid.h):
+ * ((bi B1 + bj) B2 + bk) N + local, local = li 16 + lj 4 + lk (3D) or li 4 + lj (2D). */
+static inline __attribute__((always_inline)) void kernel_weights(int S, const sm_real *xp, const sm_step_ctx *c,
+                                                                 const sm_grid *g, weights *W) {
+#if D == 2
+    const size_t stride[2] = {(size_t)g->blocks[1] * 16, 16};
+    const unsigned lmul[2] = {4, 1};
+#else
+    const size_t stride[3] = {(size_t)g->blocks[1] * (size_t)g->blocks[2] * 64, (size_t)g->blocks[2] * 64, 64};
+    const unsigned lmul[3] = {16, 4, 1};
+#endif
     for (int a = 0; a < D; a++) {
         sm_real X = (xp[a] - c->lo[a]) * c->inv_dx;
-        W->X[a] = X;
-        W->base[a] = sm_kernel_1d(S, X, W->w[a], W->dw[a]);
-        for (int k = 0; k < 4; k++) W->dw[a][k] *= c->inv_dx;
+        int b = sm_kernel_1d(S, X, W->w[a], W->dw[a]);
+        W->base[a] = b;
+        for (int k = 0; k < 4; k++) {
+            int node = b + k;
+            W->dw[a][k] *= c->inv_dx;
+            W->dp[a][k] = ((sm_real)node - X) * c->dx;
+            W->off[a][k] = (size_t)(node >> SM_BLOCK_BITS) * stride[a] + (size_t)(node & SM_BLOCK_MASK) * lmul[a];
+        }
     }
 }
 
@@ -65,27 +80,22 @@ static inline int stencil_size(const sm_world *w) { return w->def.kernel == SM_K
 #define STENCIL_BEGIN(S, W, g, c)                                                              \
     for (int s0 = 0; s0 < (S); s0++)                                                           \
         for (int s1 = 0; s1 < (S); s1++) {                                                     \
-            const int s2 = 0;                                                                  \
-            (void)s2;                                                                          \
-            size_t ni = sm_grid_node((g), (W).base[0] + s0, (W).base[1] + s1, 0);              \
+            size_t ni = (W).off[0][s0] + (W).off[1][s1];                                       \
             sm_real wgt = (W).w[0][s0] * (W).w[1][s1];                                         \
             sm_real gw[2] = {(W).dw[0][s0] * (W).w[1][s1], (W).w[0][s0] * (W).dw[1][s1]};      \
-            sm_real dpos[2] = {((sm_real)((W).base[0] + s0) - (W).X[0]) * (c)->dx,             \
-                               ((sm_real)((W).base[1] + s1) - (W).X[1]) * (c)->dx};
+            sm_real dpos[2] = {(W).dp[0][s0], (W).dp[1][s1]};
 #define STENCIL_END }
 #else
 #define STENCIL_BEGIN(S, W, g, c)                                                              \
     for (int s0 = 0; s0 < (S); s0++)                                                           \
         for (int s1 = 0; s1 < (S); s1++)                                                       \
             for (int s2 = 0; s2 < (S); s2++) {                                                 \
-                size_t ni = sm_grid_node((g), (W).base[0] + s0, (W).base[1] + s1, (W).base[2] + s2); \
+                size_t ni = (W).off[0][s0] + (W).off[1][s1] + (W).off[2][s2];                  \
                 sm_real wyz = (W).w[1][s1] * (W).w[2][s2];                                     \
                 sm_real wgt = (W).w[0][s0] * wyz;                                              \
                 sm_real gw[3] = {(W).dw[0][s0] * wyz, (W).w[0][s0] * (W).dw[1][s1] * (W).w[2][s2], \
                                  (W).w[0][s0] * (W).w[1][s1] * (W).dw[2][s2]};                 \
-                sm_real dpos[3] = {((sm_real)((W).base[0] + s0) - (W).X[0]) * (c)->dx,         \
-                                   ((sm_real)((W).base[1] + s1) - (W).X[1]) * (c)->dx,         \
-                                   ((sm_real)((W).base[2] + s2) - (W).X[2]) * (c)->dx};
+                sm_real dpos[3] = {(W).dp[0][s0], (W).dp[1][s1], (W).dp[2][s2]};
 #define STENCIL_END }
 #endif
 
@@ -170,7 +180,7 @@ static inline __attribute__((always_inline)) void p2g_block(sm_world *w, const s
     for (uint32_t idx = w->block_start[b]; idx < w->block_start[b + 1]; idx++) {
         const size_t p = w->perm[idx];
         weights W;
-        kernel_weights(S, P->x + p * D, c, &W);
+        kernel_weights(S, P->x + p * D, c, g, &W);
         const sm_real mp = P->mass[p];
         sm_real mv[D], mC[DD], Vt[DD];
         for (int a = 0; a < D; a++) mv[a] = mp * P->v[p * D + a];
@@ -331,7 +341,7 @@ static inline __attribute__((always_inline)) size_t g2p_one(sm_world *w, const s
     const int transfer = w->def.transfer;
     const sm_real dt = (sm_real)c->dt;
     weights W;
-    kernel_weights(S, P->x + p * D, c, &W);
+    kernel_weights(S, P->x + p * D, c, g, &W);
     sm_real vpic[D] = {0}, vflip[D] = {0}, vbar[D] = {0}, Bn[DD] = {0}, T[DD] = {0};
     STENCIL_BEGIN(S, W, g, c)
     for (int a = 0; a < D; a++) {

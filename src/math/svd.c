@@ -204,6 +204,11 @@ void sm_svd3(const sm_real F[9], sm_real U[9], sm_real sigma[3], sm_real V[9]) {
         svd3_jacobi(&a00, &a11, &a01, &a02, &a12, W, 0, 1);
         svd3_jacobi(&a00, &a22, &a02, &a01, &a12, W, 0, 2);
         svd3_jacobi(&a11, &a22, &a12, &a01, &a02, W, 1, 2);
+        /* Once every off-diagonal entry is below the skip threshold of svd_jacobi_t, the remaining
+         * sweeps would apply identity rotations only: stopping changes no bit of the result. MPM's
+         * F^E is close to a rotation, so this usually ends after one or two sweeps. */
+        if (a01 * a01 <= SVD_EPS2 * a00 * a11 && a02 * a02 <= SVD_EPS2 * a00 * a22 && a12 * a12 <= SVD_EPS2 * a11 * a22)
+            break;
     }
 
     /* B = G W and its squared column norms. */

@@ -38,13 +38,16 @@ int sm_write_ply(const sm_world *w, const char *path, char *err, size_t errlen) 
     sm_particles_view pv;
     sm_world_particles(w, &pv);
     const int d = pv.dim;
+    const sm_world_def *def = sm_world_get_def(w);
     fprintf(f,
-            "ply\nformat binary_little_endian 1.0\ncomment sandmpm %s\nelement vertex %zu\n"
+            "ply\nformat binary_little_endian 1.0\ncomment sandmpm %s\ncomment dim %d\n"
+            "comment domain %.9g %.9g %.9g %.9g %.9g %.9g\nelement vertex %zu\n"
             "property float x\nproperty float y\nproperty float z\n"
             "property float vx\nproperty float vy\nproperty float vz\n"
             "property ushort material\nproperty float q\nproperty float friction_angle\nproperty float Je\n"
             "property float volume\nend_header\n",
-            sm_version(), pv.n);
+            sm_version(), d, def->domain_min[0], def->domain_min[1], def->domain_min[2], def->domain_max[0],
+            def->domain_max[1], def->domain_max[2], pv.n);
     unsigned char rec[4 * 6 + 2 + 4 * 4];
     int ok = 1;
     for (size_t i = 0; i < pv.n && ok; i++) {

@@ -99,12 +99,15 @@ int main(void) {
         CHECK(hdr_end != NULL);
         char expect_hdr[1024];
         snprintf(expect_hdr, sizeof expect_hdr,
-                 "ply\nformat binary_little_endian 1.0\ncomment sandmpm %s\nelement vertex %zu\n"
+                 "ply\nformat binary_little_endian 1.0\ncomment sandmpm %s\ncomment dim %d\n"
+                 "comment domain %.9g %.9g %.9g %.9g %.9g %.9g\nelement vertex %zu\n"
                  "property float x\nproperty float y\nproperty float z\n"
                  "property float vx\nproperty float vy\nproperty float vz\n"
                  "property ushort material\nproperty float q\nproperty float friction_angle\nproperty float Je\n"
                  "property float volume\nend_header\n",
-                 sm_version(), pv.n);
+                 sm_version(), dim, sm_world_get_def(w)->domain_min[0], sm_world_get_def(w)->domain_min[1],
+                 sm_world_get_def(w)->domain_min[2], sm_world_get_def(w)->domain_max[0], sm_world_get_def(w)->domain_max[1],
+                 sm_world_get_def(w)->domain_max[2], pv.n);
         size_t hl = (size_t)(hdr_end - (const char *)b) + strlen("end_header\n");
         CHECK(hl == strlen(expect_hdr) && memcmp(b, expect_hdr, hl) == 0);
         const size_t rec = 38 + 4;

@@ -167,6 +167,25 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
         return SM_ERR_NOMEM;
     }
     w->threads = resolve_threads(def->threads);
+    /* Domain walls: half-spaces 2 cells inside each face, behaving as def->wall_mode. */
+    w->colliders = calloc((size_t)(2 * def->dim + 4), sizeof *w->colliders);
+    if (!w->colliders) {
+        sm_world_destroy(w);
+        if (err && errlen) snprintf(err, errlen, "out of memory");
+        return SM_ERR_NOMEM;
+    }
+    w->colliders_cap = 2 * def->dim + 4;
+    for (int a = 0; a < def->dim; a++)
+        for (int side = 0; side < 2; side++) {
+            sm_collider_def wc = sm_collider_def_default();
+            wc.shape_count = 1;
+            wc.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
+            wc.shapes[0].center[a] = side ? w->def.domain_max[a] - 2 * def->dx : w->def.domain_min[a] + 2 * def->dx;
+            wc.shapes[0].normal[a] = side ? -1 : 1;
+            wc.mode = def->wall_mode;
+            wc.friction = def->wall_friction;
+            sm_collider_init(&w->colliders[w->nwalls++], &wc);
+        }
     w->min_dt = INFINITY;
     w->max_dt = 0;
     *out = w;
@@ -447,13 +466,15 @@ int sm_world_add_collider(sm_world *w, const sm_collider_def *c) {
     double qn = 0;
     for (int k = 0; k < 4; k++) qn += c->pose.rotation[k] * c->pose.rotation[k];
     if (!(fabs(qn - 1) < 1e-6)) return (sm_world_fail(w, SM_ERR_INVALID, "collider pose.rotation: must be a unit quaternion"), -1);
-    if (w->ncolliders == w->colliders_cap) {
-        int cap = w->colliders_cap ? 2 * w->colliders_cap : 4;
+    if (w->ncolliders + w->nwalls + 1 > w->colliders_cap) {
+        int cap = 2 * (w->ncolliders + w->nwalls + 1);
         sm_collider *q = realloc(w->colliders, (size_t)cap * sizeof *q);
         if (!q) return (sm_world_fail(w, SM_ERR_NOMEM, "out of memory"), -1);
         w->colliders = q;
         w->colliders_cap = cap;
     }
+    /* The walls live after the user colliders: move them up one place. */
+    memmove(&w->colliders[w->ncolliders + 1], &w->colliders[w->ncolliders], (size_t)w->nwalls * sizeof *w->colliders);
     sm_collider_init(&w->colliders[w->ncolliders], c);
     if (w->time != 0) {
         /* Added mid-run: evaluate a scripted pose at the current time. */
@@ -470,6 +491,12 @@ int sm_world_add_collider(sm_world *w, const sm_collider_def *c) {
 double sm_world_collider_distance(const sm_world *w, int id, const double x[3], double grad[3]) {
     if (id < 0 || id >= w->ncolliders) return INFINITY;
     return sm_collider_phi(&w->colliders[id], w->dim, 0, x, grad);
+}
+
+int sm_world_collider_count(const sm_world *w) { return w->ncolliders; }
+
+const sm_collider_def *sm_world_collider_def(const sm_world *w, int id) {
+    return (id >= 0 && id < w->ncolliders) ? &w->colliders[id].def : NULL;
 }
 
 void sm_world_collider_pose(const sm_world *w, int id, sm_pose *pose) {

@@ -85,7 +85,8 @@ struct sm_world {
     sm_particles p;
 
     sm_collider *colliders;
-    int ncolliders, colliders_cap;
+    int ncolliders, colliders_cap; /* user colliders [0, ncolliders); the domain walls follow them */
+    int nwalls;                    /* 2 dim half-spaces 2 cells inside the domain boundary */
 
     sm_emitter *emitters;
     int nemitters, emitters_cap;

@@ -328,6 +328,10 @@ double sm_world_collider_distance(const sm_world *w, int id, const double x[3], 
 /** Current pose of collider id. */
 void sm_world_collider_pose(const sm_world *w, int id, sm_pose *pose);
 
+/** Number of colliders, and the definition collider id was added with (NULL if out of range). */
+int sm_world_collider_count(const sm_world *w);
+const sm_collider_def *sm_world_collider_def(const sm_world *w, int id);
+
 /* ------------------------------------------------------------------------------------------ */
 /* Time stepping                                                                                */
 

@@ -226,7 +226,7 @@ static void SM_FN(grid_update)(sm_world *w, const sm_step_ctx *c) {
     const size_t bn = (size_t)g->block_nodes;
     const double dt = c->dt;
     const sm_collider *cols = w->colliders;
-    const int ncol = w->ncolliders;
+    const int ncol = w->ncolliders + w->nwalls;
     const int static_sticks = w->def.static_friction_sticks;
 #pragma omp parallel for schedule(static) num_threads(c->threads)
     for (long t = 0; t < nb; t++) {
@@ -248,73 +248,17 @@ static void SM_FN(grid_update)(sm_world *w, const sm_step_ctx *c) {
                 v[a] = vstar[a];
                 xi[a] = (double)c->lo[a] + (double)ijk[a] * (double)c->dx;
             }
-            if (ncol > 0) {
-                sm_node_contact rec;
-                sm_collide_node(cols, ncol, D, xi, dt, v, &rec);
-                if (rec.count > 0) {
-                    double dv[3] = {v[0] - vstar[0], v[1] - vstar[1], v[2] - vstar[2]};
-                    for (int a = 0; a < D; a++) g->f[ni * D + a] = (sm_real)v[a]; /* v-bar */
-                    int stuck = sm_friction_node(cols, D, xi, &rec, dv, v);
-                    for (int a = 0; a < D; a++) {
-                        g->vt[ni * D + a] = (sm_real)v[a];
-                        if (stuck && static_sticks) g->f[ni * D + a] = (sm_real)v[a];
-                    }
-                    goto walls_done;
-                }
+            /* GRID_COLLISIONS (user colliders, then the domain walls), then FRICTION. */
+            sm_node_contact rec;
+            sm_collide_node(cols, ncol, D, xi, dt, v, &rec);
+            for (int a = 0; a < D; a++) g->f[ni * D + a] = (sm_real)v[a]; /* v-bar */
+            if (rec.count > 0) {
+                double dv[3] = {v[0] - vstar[0], v[1] - vstar[1], v[2] - vstar[2]};
+                int stuck = sm_friction_node(cols, D, xi, &rec, dv, v);
+                if (stuck && static_sticks)
+                    for (int a = 0; a < D; a++) g->f[ni * D + a] = (sm_real)v[a];
             }
-            for (int a = 0; a < D; a++) g->f[ni * D + a] = g->vt[ni * D + a] = (sm_real)v[a];
-        walls_done:;
-            /* Domain walls: separating (or as configured) planes 2 cells inside the domain
-             * boundary, applied to both v-bar and v-tilde. */
-            {
-                double vb[3] = {0, 0, 0}, vtl[3] = {0, 0, 0};
-                int touched = 0;
-                for (int a = 0; a < D; a++) {
-                    vb[a] = (double)g->f[ni * D + a];
-                    vtl[a] = (double)g->vt[ni * D + a];
-                }
-                for (int a = 0; a < D; a++) {
-                    double lo = (double)c->lo[a] + 2.0 * (double)c->dx;
-                    double hi = (double)c->lo[a] + (double)(w->cells[a] - 2) * (double)c->dx;
-                    for (int side = 0; side < 2; side++) {
-                        double nrm = side ? -1.0 : 1.0; /* outward normal of the wall solid */
-                        double phi0 = side ? (hi - xi[a]) : (xi[a] - lo);
-                        double phihat = phi0 + dt * nrm * vb[a] - (phi0 < 0 ? phi0 : 0);
-                        int hit = 0;
-                        if (w->def.wall_mode == SM_COLLIDE_STICKY) {
-                            if (phi0 < 0) {
-                                for (int e = 0; e < D; e++) vb[e] = vtl[e] = 0;
-                                touched = 1;
-                            }
-                            continue;
-                        } else if (w->def.wall_mode == SM_COLLIDE_SLIP) {
-                            hit = (phi0 < 0);
-                        } else {
-                            hit = (phihat < 0);
-                        }
-                        if (!hit) continue;
-                        double dvn = -phihat / dt * nrm; /* added velocity along axis a */
-                        vb[a] += dvn;
-                        vtl[a] += dvn;
-                        touched = 1;
-                        double mu = w->def.wall_friction;
-                        if (mu > 0) {
-                            double vt2 = 0;
-                            for (int e = 0; e < D; e++)
-                                if (e != a) vt2 += vtl[e] * vtl[e];
-                            double vtn = sqrt(vt2), red = mu * fabs(dvn);
-                            double s = vtn > red ? (vtn - red) / vtn : 0.0;
-                            for (int e = 0; e < D; e++)
-                                if (e != a) vtl[e] *= s;
-                        }
-                    }
-                }
-                if (touched)
-                    for (int a = 0; a < D; a++) {
-                        g->f[ni * D + a] = (sm_real)vb[a];
-                        g->vt[ni * D + a] = (sm_real)vtl[a];
-                    }
-            }
+            for (int a = 0; a < D; a++) g->vt[ni * D + a] = (sm_real)v[a];
         }
     }
 }

@@ -47,6 +47,23 @@ sm_status sm_world_fail(sm_world *w, sm_status status, const char *fmt, ...) {
 
 const char *sm_world_errmsg(const sm_world *w) { return w ? w->err : "no world"; }
 
+void sm_implicit_ws_free(sm_implicit_ws *ws) {
+    free(ws->bmap);
+    free(ws->partial);
+    free(ws->mass);
+    free(ws->vn);
+    free(ws->z);
+    free(ws->y);
+    free(ws->dz);
+    free(ws->tmp);
+    free(ws->force);
+    free(ws->krylov);
+    free(ws->rec);
+    free(ws->pp);
+    free(ws->G);
+    memset(ws, 0, sizeof *ws);
+}
+
 sm_world_def sm_world_def_default(void) {
     sm_world_def d;
     memset(&d, 0, sizeof d);
@@ -66,6 +83,10 @@ sm_world_def sm_world_def_default(void) {
     d.elastic_cfl = 0.5;
     d.wall_mode = SM_COLLIDE_SEPARATE;
     d.wall_friction = 0;
+    d.newton_tolerance = 1e-3;
+    d.newton_max_iterations = 20;
+    d.gmres_max_iterations = 15;
+    d.gmres_tolerance = 1e-3;
     d.static_friction_sticks = 1;
     d.particle_projection = 1;
     d.threads = 0;
@@ -95,8 +116,11 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
     else if (def->kernel != SM_KERNEL_QUADRATIC && def->kernel != SM_KERNEL_CUBIC) snprintf(msg, sizeof msg, "kernel: unknown value %d", (int)def->kernel);
     else if (def->transfer != SM_TRANSFER_APIC && def->transfer != SM_TRANSFER_PIC && def->transfer != SM_TRANSFER_FLIP) snprintf(msg, sizeof msg, "transfer: unknown value %d", (int)def->transfer);
     else if (!(def->flip_ratio >= 0 && def->flip_ratio <= 1)) snprintf(msg, sizeof msg, "flip_ratio: must be in [0, 1], got %g", def->flip_ratio);
-    else if (def->integrator == SM_INTEGRATOR_IMPLICIT) snprintf(msg, sizeof msg, "integrator: the implicit integrator is not available yet; use explicit");
-    else if (def->integrator != SM_INTEGRATOR_EXPLICIT) snprintf(msg, sizeof msg, "integrator: unknown value %d", (int)def->integrator);
+    else if (def->integrator != SM_INTEGRATOR_EXPLICIT && def->integrator != SM_INTEGRATOR_IMPLICIT) snprintf(msg, sizeof msg, "integrator: unknown value %d", (int)def->integrator);
+    else if (!(def->newton_tolerance > 0) || !isfinite(def->newton_tolerance)) snprintf(msg, sizeof msg, "newton_tolerance: must be > 0, got %g", def->newton_tolerance);
+    else if (def->newton_max_iterations < 1 || def->newton_max_iterations > 1000) snprintf(msg, sizeof msg, "newton_max_iterations: must be in 1..1000, got %d", def->newton_max_iterations);
+    else if (def->gmres_max_iterations < 1 || def->gmres_max_iterations > 200) snprintf(msg, sizeof msg, "gmres_max_iterations: must be in 1..200, got %d", def->gmres_max_iterations);
+    else if (!(def->gmres_tolerance > 0 && def->gmres_tolerance < 1)) snprintf(msg, sizeof msg, "gmres_tolerance: must be in (0, 1), got %g", def->gmres_tolerance);
     else if (!(def->cfl > 0 && def->cfl <= 1)) snprintf(msg, sizeof msg, "cfl: must be in (0, 1], got %g", def->cfl);
     else if (!(def->max_dt > 0) || !isfinite(def->max_dt)) snprintf(msg, sizeof msg, "max_dt: must be > 0, got %g", def->max_dt);
     else if (!(def->elastic_cfl >= 0) || !isfinite(def->elastic_cfl)) snprintf(msg, sizeof msg, "elastic_cfl: must be >= 0, got %g", def->elastic_cfl);
@@ -213,6 +237,7 @@ void sm_world_destroy(sm_world *w) {
     free(w->mats);
     free(w->colliders);
     free(w->emitters);
+    sm_implicit_ws_free(&w->imp);
     free(w->keys);
     free(w->perm);
     free(w->block_start);
@@ -617,10 +642,19 @@ sm_status sm_world_step(sm_world *w, double dt) {
         w->ops->sort(w, &c);
         t1 = sm_seconds();
         w->stage_seconds[SM_STAGE_SORT] += t1 - t0;
-        w->ops->p2g(w, &c, 1);
+        const int implicit = (w->def.integrator == SM_INTEGRATOR_IMPLICIT);
+        w->ops->p2g(w, &c, !implicit);
         t0 = sm_seconds();
         w->stage_seconds[SM_STAGE_P2G] += t0 - t1;
-        w->ops->grid_update(w, &c);
+        if (implicit) {
+            sm_status ist = w->ops->implicit_grid(w, &c);
+            if (ist != SM_OK) {
+                w->failed = 1;
+                return ist;
+            }
+        } else {
+            w->ops->grid_update(w, &c);
+        }
         t1 = sm_seconds();
         w->stage_seconds[SM_STAGE_GRID] += t1 - t0;
         long bad = w->ops->grid_check(w);
@@ -753,6 +787,11 @@ void sm_world_diagnostics(const sm_world *w, sm_diagnostics *o) {
     for (int s = 0; s < SM_STAGE_COUNT; s++) o->stage_seconds[s] = w->stage_seconds[s];
     o->clamped_particles = w->clamped;
     o->projected_particles = w->projected;
+    o->newton_iterations = w->newton_total;
+    o->gmres_iterations = w->gmres_total;
+    o->last_newton_iterations = w->newton_last;
+    o->last_newton_residual = w->newton_last_residual;
+    o->newton_unconverged = w->newton_unconverged;
 }
 
 void sm_world_reset_step_stats(sm_world *w) {
@@ -772,6 +811,14 @@ uint64_t sm_world_state_hash(const sm_world *w) {
     h = sm_hash64(P->q, n * sizeof(sm_real), h);
     h = sm_hash64(P->alpha, n * sizeof(sm_real), h);
     return h;
+}
+
+double sm_world_debug_implicit_jvp(sm_world *w, double dt, uint64_t seed, double vscale, double h) {
+    sm_step_ctx c;
+    fill_ctx(w, dt, &c);
+    w->ops->sort(w, &c);
+    w->ops->p2g(w, &c, 0);
+    return w->ops->implicit_jvp_check(w, &c, seed, vscale, h);
 }
 
 void sm_world_debug_transfer_roundtrip(sm_world *w, sm_transfer_totals *t) {

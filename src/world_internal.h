@@ -6,6 +6,7 @@
 #include "collide/collide.h"
 #include "core/common.h"
 #include "grid/grid.h"
+#include "material/implicit.h"
 
 /* A material with everything the hot loops need precomputed. */
 typedef struct sm_material_rt {
@@ -38,6 +39,22 @@ typedef struct sm_emitter {
     uint64_t emitted;         /* particles emitted so far */
 } sm_emitter;
 
+/* Workspace of the implicit integrator, grown as needed. Vectors are "compact": the nodes of the
+ * active grid blocks in active-list order, d values per node. */
+typedef struct sm_implicit_ws {
+    int32_t *bmap;              /* grid block -> position in the active list, or -1 */
+    size_t bmap_cap;
+    size_t ncap;                /* capacity in nodes of the compact vectors */
+    sm_real *mass, *vn, *z, *y, *dz, *tmp, *force, *krylov; /* krylov: (K+1) vectors */
+    int kcap;                   /* Krylov vectors allocated */
+    sm_node_contact *rec;       /* GRID_COLLISIONS records per compact node */
+    size_t pcap;                /* particle capacity */
+    sm_implicit_particle *pp;   /* per-particle precompute (Algorithm 8) */
+    sm_real *G;                 /* per-particle force matrices V0 Y(F) F^nT */
+    double *partial;            /* per-active-block partial sums (deterministic dot products) */
+} sm_implicit_ws;
+void sm_implicit_ws_free(sm_implicit_ws *ws);
+
 /* Per-step context (DESIGN §3): what the stages need, so the world holds no per-step scratch. */
 typedef struct sm_step_ctx {
     double dt;
@@ -56,6 +73,11 @@ typedef struct sm_dim_ops {
     void (*p2g)(sm_world *w, const sm_step_ctx *c, int with_force);
     /* Grid update v* = v + dt (f/m + g), colliders and walls (v-bar), friction (v-tilde). */
     void (*grid_update)(sm_world *w, const sm_step_ctx *c);
+    /* The implicit replacement of grid_update (Algorithm 5): after a P2G without force, solves for
+     * v-bar with Newton-GMRES and leaves v^n, v-bar, v-tilde where grid_update does. */
+    sm_status (*implicit_grid)(sm_world *w, const sm_step_ctx *c);
+    /* Test hook: relative error of TIMES_DIFF against finite differences of the residual. */
+    double (*implicit_jvp_check)(sm_world *w, const sm_step_ctx *c, uint64_t seed, double vscale, double h);
     /* Returns the index of a node with a non-finite velocity, or -1. */
     long (*grid_check)(const sm_world *w);
     /* G2P: v, B from v-tilde; x, F^E-hat from v-bar. */
@@ -108,6 +130,11 @@ struct sm_world {
     double stage_seconds[SM_STAGE_COUNT];
     uint64_t clamped;
     uint64_t projected;
+    sm_implicit_ws imp;
+    uint64_t newton_total, gmres_total, newton_unconverged;
+    int newton_last;
+    double newton_hist[64];  /* residual (m/s^2) of each Newton step of the last implicit step */
+    double newton_last_residual;
     int threads;
     int failed;             /* a numerical failure stopped the world */
 
@@ -137,6 +164,10 @@ typedef struct sm_transfer_totals {
     double mass[3], mom[3][3], ang[3][3]; /* [0] particles before, [1] grid, [2] particles after */
 } sm_transfer_totals;
 void sm_world_debug_transfer_roundtrip(sm_world *w, sm_transfer_totals *t);
+
+/* Test hook: sorts and rasterises mass (P2G without force), then runs implicit_jvp_check with a
+ * time step dt. */
+double sm_world_debug_implicit_jvp(sm_world *w, double dt, uint64_t seed, double vscale, double h);
 
 /* Particle totals: mass, momentum, angular momentum (APIC B term included). */
 void sm_world_particle_totals(const sm_world *w, double *mass, double mom[3], double ang[3]);

@@ -53,8 +53,9 @@ int main(void) {
     CHECK_MSG(err, "cfl: must be in (0, 1], got 2");
     def = sm_world_def_default();
     def.integrator = SM_INTEGRATOR_IMPLICIT;
+    def.gmres_tolerance = 2;
     CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_ERR_INVALID);
-    CHECK_MSG(err, "implicit");
+    CHECK_MSG(err, "gmres_tolerance: must be in (0, 1), got 2");
     sm_world_destroy(NULL); /* accepted */
 
     for (int dim = 2; dim <= 3; dim++) {

@@ -76,7 +76,7 @@ typedef enum sm_transfer {
 /** Time integrator of the grid velocities. */
 typedef enum sm_integrator {
     SM_INTEGRATOR_EXPLICIT = 0, /**< symplectic Euler (Algorithm 3) */
-    SM_INTEGRATOR_IMPLICIT = 1  /**< Newton–GMRES (Algorithm 5); not yet available */
+    SM_INTEGRATOR_IMPLICIT = 1  /**< Newton–GMRES with plasticity inside the force (Algorithms 5, 6, 8) */
 } sm_integrator;
 
 /** Collision behaviour of a collider or the domain walls (thesis §3.6.3, Algorithm 7). */
@@ -112,6 +112,13 @@ typedef struct sm_world_def {
                                   its surface (position only; counted in diagnostics). Collisions are still
                                   resolved on the grid (§3.6.3); this only catches the small residual
                                   penetration the kernel's smoothing allows. 0: off, as in the thesis. */
+    double newton_tolerance; /**< implicit: Newton stops when the mass-weighted RMS of the residual (Algorithm 5,
+                                  sqrt(sum m |y|^2 / sum m)) is below newton_tolerance * dt; units m/s^2.
+                                  Default 1e-3 (about 1e-4 g). */
+    int newton_max_iterations;/**< implicit: at most this many Newton steps per time step. Default 20. */
+    int gmres_max_iterations; /**< implicit: GMRES iterations per Newton step (the thesis caps it at 15). Default 15. */
+    double gmres_tolerance;   /**< implicit: GMRES stops when the residual norm falls below this fraction of
+                                  the right-hand side's. Default 1e-3. */
     int threads;             /**< OpenMP threads; 0 = OpenMP's default. Results do not depend on it. */
     size_t max_particles;    /**< refuse to grow beyond this many particles; 0 = no limit. */
 } sm_world_def;
@@ -382,6 +389,11 @@ typedef struct sm_diagnostics {
     double stage_seconds[SM_STAGE_COUNT]; /**< wall time per stage since creation */
     uint64_t clamped_particles;   /**< particle-steps pushed back inside the domain by the safety clamp */
     uint64_t projected_particles; /**< particle-steps moved out of a collider (particle_projection) */
+    uint64_t newton_iterations;   /**< implicit: Newton steps since creation */
+    uint64_t gmres_iterations;    /**< implicit: GMRES iterations since creation */
+    int last_newton_iterations;   /**< implicit: Newton steps of the last time step */
+    double last_newton_residual;  /**< implicit: final RMS residual of the last step divided by dt, m/s^2 */
+    uint64_t newton_unconverged;  /**< implicit: time steps that hit newton_max_iterations */
 } sm_diagnostics;
 
 /** Computes the diagnostics (O(n)). */

@@ -363,20 +363,29 @@ void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3],
         for (int k = 0; k < 3; k++) xhat[k] = xi[k] + dt * v[k];
         double phi0 = sm_collider_phi(c, dim, 0, xi, NULL);
         sm_collide_mode mode = c->def.mode;
-        if (mode == SM_COLLIDE_STICKY) {
-            if (phi0 < 0.0 || sm_collider_phi(c, dim, 1, xhat, NULL) < 0.0) {
-                rec->sticky = b;
-                sm_collider_velocity(c, dim, xhat, v);
-            }
+        if (mode == SM_COLLIDE_STICKY && phi0 < 0.0) {
+            rec->sticky = b;
+            sm_collider_velocity(c, dim, xhat, v);
             continue;
         }
         double n[3];
         double phihat = sm_collider_phi(c, dim, 1, xhat, n) - SM_MIN(phi0, 0.0);
-        if ((mode == SM_COLLIDE_SEPARATE && phihat < 0.0) || (mode == SM_COLLIDE_SLIP && phi0 < 0.0)) {
+        /* A node arriving at a sticky collider (outside at t^n, inside at t^{n+1}) is projected onto
+         * the surface like a separating contact and marked `stick`: FRICTION then stops it relative
+         * to the collider (infinite friction). Continuous in v, so Newton's constraint set does not
+         * jump (a plain stick would), and the node never enters the collider. */
+        /* A node that a previous projection left exactly on the surface stays in contact: phi-hat is
+         * compared with a rounding-level tolerance, not with 0. Otherwise the contact set of the
+         * implicit solve flickers between Newton steps (a node 1e-17 m outside is not "in contact"
+         * and its normal residual, the contact force, suddenly counts). */
+        const double ctol = 1e-9 * (1.0 + fabs(xi[0]) + fabs(xi[1]) + fabs(xi[2]));
+        int arriving = (mode == SM_COLLIDE_STICKY && phihat < ctol);
+        if ((mode == SM_COLLIDE_SEPARATE && phihat < ctol) || (mode == SM_COLLIDE_SLIP && phi0 < 0.0) || arriving) {
             /* Beyond SM_MAX_NODE_CONTACTS the projection is still applied; only the record (and
              * so the friction of that contact) is dropped. */
             if (rec->count < SM_MAX_NODE_CONTACTS) {
                 rec->body[rec->count] = b;
+                rec->stick[rec->count] = arriving;
                 for (int k = 0; k < 3; k++) rec->n[rec->count][k] = n[k];
                 rec->count++;
             }
@@ -392,7 +401,7 @@ int sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const s
     int stuck = rec->count > 0;
     for (int j = 0; j < rec->count; j++) {
         const sm_collider *c = &cs[rec->body[j]];
-        double limit = c->def.friction * dvn;
+        double limit = rec->stick[j] ? INFINITY : c->def.friction * dvn;
         if (!(limit > 0.0)) {
             stuck = 0;
             continue;

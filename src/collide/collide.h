@@ -50,15 +50,17 @@ typedef struct sm_node_contact {
     int sticky;                               /* collider index that stuck this node, or -1 */
     int count;                                /* recorded slip/separate collisions */
     int body[SM_MAX_NODE_CONTACTS];           /* collider index of each */
+    int stick[SM_MAX_NODE_CONTACTS];          /* 1: arriving at a sticky collider (infinite friction) */
     double n[SM_MAX_NODE_CONTACTS][3];        /* normal (grad phi at x-hat) of each */
 } sm_node_contact;
 
 /* GRID_COLLISIONS for one node at position xi (3 comps) with velocity v (in: v*, out: v-bar),
  * over all nc colliders in order, as Algorithm 7. rec receives the contacts (always written).
- * One deliberate extension: a sticky collider also sticks a node that is outside at t^n but would
- * be inside at t^{n+1} (phi_1(x-hat) < 0), so no-slip ground is not penetrated by nodes arriving
- * from above (Algorithm 7 only sticks nodes already inside; that let a collapsing column sink
- * about 0.7 dx into a sticky ground). */
+ * One deliberate extension: a node outside a sticky collider at t^n that would be inside at
+ * t^{n+1} (phi_1(x-hat) < 0) is projected onto the surface and recorded as a contact with
+ * stick = 1, which FRICTION treats as infinite friction (stopped relative to the collider), so a
+ * no-slip ground is not penetrated by nodes arriving from above. Algorithm 7 only sticks nodes
+ * already inside, which let a collapsing column sink about 0.7 dx into a sticky ground. */
 void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3], double dt,
                      double v[3], sm_node_contact *rec);
 

@@ -23,7 +23,8 @@
  *
  * 2. The Jacobian ybar = dy/ds = Wbar Zbar (A.28).
  *    g_i(z) = (2 mu h_i + lambda K) / c_i with c = max(z, f), h = ln c, K = sum h  (floor policy):
- *      Wbar_ij = [ chi_j (2 mu delta_ij + lambda) / c_j - delta_ij chi_i (2 mu h_i + lambda K) / c_i ] / c_i,
+ *      Wbar_ij = [ chi_j (2 mu delta_ij + lambda) / c_j
+ *                  - delta_ij chi_i (2 mu h_i + lambda K) / c_i ] / c_i,
  *      chi_j = [z_j >= f]. This is (A.29) (extracted correctly) with the floor's zero slope.
  *    Zbar: not plastic and case I: z = s, Zbar = I. Case II: z = o, Zbar = 0, and y = g(o) = 0, so
  *    Mhat = 0 altogether. Case III: c = max(s, f), eps = ln c, k = tr eps, sd = eps - k/d o,
@@ -161,7 +162,8 @@ int sm_implicit_diag(int d, const sm_real *sigma, const sm_implicit_material *ma
         const sm_real ad = (1 + p) / (sm_real)d;
         for (int i = 0; i < d; i++)
             for (int j = 0; j < d; j++) {
-                sm_real e = ad - c0 * nh[i] - p * ((i == j ? SM_R(1.0) : SM_R(0.0)) - nh[i] * nh[j]);
+                sm_real id = i == j ? SM_R(1.0) : SM_R(0.0);
+                sm_real e = ad - c0 * nh[i] - p * (id - nh[i] * nh[j]);
                 Zbar[i * d + j] = z[i] * e * w[j];
             }
     } else {
@@ -273,7 +275,8 @@ static void mat_mult(int d, const sm_real *A, const sm_real *B, sm_real *C) {
 /* out = U (Mhat : (U^T X W)) W^T. */
 static void apply_full(int d, const sm_real *U, const sm_real *W, const sm_implicit_mhat *mhat,
                        const sm_real *X, sm_real *out) {
-    sm_real t1[9], t2[9], t3[9];
+    /* zeroed: keeps -Wmaybe-uninitialized quiet when SM_ASSERT is compiled out */
+    sm_real t1[9] = {0}, t2[9] = {0}, t3[9] = {0};
     mat_tmul(d, U, X, t1);
     mat_mul(d, t1, W, t2);
     sm_implicit_mhat_apply(d, mhat, t2, t3);

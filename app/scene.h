@@ -1,0 +1,81 @@
+/* Lua 5.4 scene files: load, validate, estimate, build a world.
+ *
+ * A scene file is a Lua chunk that returns a table (keys: dim, dx, ppc, domain, materials,
+ * objects, colliders, emitters, outputs, camera, ...; see scenes/default.lua and the comment at
+ * the top of app/scene.c for the whole format). It runs in a sandbox: only the base (without
+ * dofile, loadfile, load), math, string (without string.dump) and table libraries, at most
+ * 50 million Lua instructions for the file, 1 million per motion-function call, and 256 MB of Lua
+ * memory. The global table `params` holds params.quality ("preview", "paper" or "test") and every
+ * --set KEY=VALUE; the global function axis_angle(ax, ay, az, degrees) returns the quaternion
+ * {w, x, y, z} of a rotation, for motion functions.
+ *
+ * Errors are tier 2 (DESIGN §5): a return code (2 bad input, 5 out of memory) and a message that
+ * starts with the scene path, and the line where it can be found:
+ *   scenes/castle.lua:12: unexpected symbol near '}'
+ *   scenes/castle.lua:40: colliders[2].frction: unknown key (did you mean "friction"?)
+ *   scenes/castle.lua: materials.sand.E: must be > 0, got -5 */
+#ifndef SM_APP_SCENE_H
+#define SM_APP_SCENE_H
+
+#include <stddef.h>
+
+#include "sandmpm/sandmpm.h"
+
+/* Owns the world, the lua_State (kept alive for motion functions) and the settings. */
+typedef struct sm_scene sm_scene;
+
+/* One --set KEY=VALUE. */
+typedef struct sm_scene_param {
+    const char *key;
+    const char *value;
+} sm_scene_param;
+
+typedef struct sm_scene_settings {
+    char name[128];                 /* file stem, e.g. "castle" ("scene" without a path) */
+    double fps;                     /* frames per second (default 24) */
+    int frames;                     /* frames after frame 0 (from `frames`, or ceil(end_time * fps)) */
+    double end_time;                /* = frames / fps, s */
+    int out_ply, out_vtk, out_csv;  /* the outputs table; defaults all 1 */
+    size_t estimated_particles;     /* particles the objects will seed (before seeding) */
+    size_t estimated_emitted;       /* particles the emitters will add up to end_time */
+    size_t estimated_bytes;         /* grid + (seeded + emitted) particles */
+    int has_camera;                 /* 1 if the scene has a camera table */
+    double eye[3], target[3], up[3];/* camera position, look-at point, up vector (default 0,1,0) */
+    double fov;                     /* vertical field of view, degrees (default 40) */
+} sm_scene_settings;
+
+/* Loads and validates a scene (no world yet). source == NULL: reads the file at path; else source
+ * is the Lua text and path only names it in messages (NULL: "scene"). quality: "preview" (NULL),
+ * "paper" or "test". params: --set KEY=VALUE pairs, as params.KEY (a number if VALUE parses as
+ * one, true/false as booleans, else the string); a key the scene never reads is an error.
+ * threads: OpenMP threads for the world, 0 = default. Returns 0 and *out, or 2 (bad input) / 5
+ * (out of memory) with *out = NULL and a message in err. */
+int sm_scene_load(const char *path, const char *source, const sm_scene_param *params, int nparams,
+                  const char *quality, int threads, sm_scene **out, char *err, size_t errlen);
+
+const sm_scene_settings *sm_scene_get_settings(const sm_scene *s);
+
+/* The world definition the scene asks for (threads included). */
+const sm_world_def *sm_scene_world_def(const sm_scene *s);
+
+/* Materials in id order (the scene's material names sorted by strcmp; ids as in the PLY output). */
+int sm_scene_material_count(const sm_scene *s);
+const char *sm_scene_material_name(const sm_scene *s, int id); /* NULL if id is out of range */
+
+/* Creates the world, materials, colliders, objects (seeded) and emitters. Returns 0, 2 (bad input:
+ * an object outside the domain, a library error, a motion function failing at t = 0; message in
+ * err) or 5 (out of memory). Once only. */
+int sm_scene_build(sm_scene *s, char *err, size_t errlen);
+
+/* The world (NULL before a successful sm_scene_build). Owned by the scene. */
+sm_world *sm_scene_world(sm_scene *s);
+
+/* NULL, or the first error of a collider's motion function (a Lua error, the instruction limit, a
+ * bad return value), e.g. "scenes/rake.lua:14: boom (colliders[1].motion at t = 0.1042)". After
+ * an error the collider keeps its last good pose; the caller should stop (exit code 2). */
+const char *sm_scene_motion_error(const sm_scene *s);
+
+/* Destroys the scene, its world and its Lua state. Accepts NULL. */
+void sm_scene_destroy(sm_scene *s);
+
+#endif

@@ -8,7 +8,7 @@
 -- friction 0.2. The motion is a Lua function of time, evaluated once per step.
 -- Preview quality uses a smaller box (0.5 m, 3 cm deep) and a curve scaled to it.
 local q = params.quality
-local dx = ({paper = 0.0045, preview = 0.008, test = 0.025})[q]
+local dx = ({paper = 0.0045, preview = 0.01, test = 0.025})[q]
 local L = (q == "paper") and 0.9 or 0.5
 local depth = (q == "paper") and 0.054 or 0.03
 local floor = 0.03

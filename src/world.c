@@ -86,7 +86,7 @@ sm_world_def sm_world_def_default(void) {
     d.newton_tolerance = 1e-3;
     d.newton_max_iterations = 20;
     d.gmres_max_iterations = 15;
-    d.gmres_tolerance = 1e-3;
+    d.gmres_tolerance = 1e-2;
     d.static_friction_sticks = 1;
     d.particle_projection = 1;
     d.threads = 0;
@@ -553,7 +553,7 @@ double sm_world_next_dt(sm_world *w, double t_end) {
     double dt = w->def.max_dt;
     double vmax = max_particle_speed(w);
     if (vmax > 0) dt = fmin(dt, w->def.cfl * w->def.dx / vmax);
-    if (w->def.elastic_cfl > 0) {
+    if (w->def.elastic_cfl > 0 && w->def.integrator == SM_INTEGRATOR_EXPLICIT) {
         double c = 0;
         for (int i = 0; i < w->nmats; i++) c = fmax(c, w->mats[i].wave_speed);
         if (c > 0) dt = fmin(dt, w->def.elastic_cfl * w->def.dx / c);

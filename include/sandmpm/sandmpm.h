@@ -99,7 +99,7 @@ typedef struct sm_world_def {
     sm_integrator integrator;/**< default SM_INTEGRATOR_EXPLICIT */
     double cfl;              /**< CFL number in (0,1]: no particle moves more than cfl*dx per step. Default 1 (thesis). */
     double max_dt;           /**< largest time step, s. Default 1e-3. */
-    double elastic_cfl;      /**< factor on the elastic-wave bound dt <= elastic_cfl*dx/c, c = sqrt((lambda+2mu)/rho). Default 0.5. 0 disables it. */
+    double elastic_cfl;      /**< factor on the elastic-wave bound dt <= elastic_cfl*dx/c, c = sqrt((lambda+2mu)/rho). Default 0.5. 0 disables it. Explicit only: the implicit integrator is not bound by it. */
     sm_collide_mode wall_mode;/**< behaviour of the domain walls. Default SM_COLLIDE_SEPARATE. */
     double wall_friction;    /**< Coulomb coefficient of the domain walls. Default 0. */
     int static_friction_sticks; /**< 1 (default): a grid node whose Coulomb friction stops it relative to a
@@ -118,7 +118,7 @@ typedef struct sm_world_def {
     int newton_max_iterations;/**< implicit: at most this many Newton steps per time step. Default 20. */
     int gmres_max_iterations; /**< implicit: GMRES iterations per Newton step (the thesis caps it at 15). Default 15. */
     double gmres_tolerance;   /**< implicit: GMRES stops when the residual norm falls below this fraction of
-                                  the right-hand side's. Default 1e-3. */
+                                  the right-hand side's. Default 1e-2 (inexact Newton). */
     int threads;             /**< OpenMP threads; 0 = OpenMP's default. Results do not depend on it. */
     size_t max_particles;    /**< refuse to grow beyond this many particles; 0 = no limit. */
 } sm_world_def;

@@ -7,7 +7,7 @@
 -- (Table 4.2: phi starts at 25 deg and hardens to 35 deg). Sticky ground.
 -- Implicit (Newton-GMRES) as in the thesis, at its max dt 1e-3 (--set explicit=true to compare).
 local q = params.quality
-local dx = ({paper = 0.01, preview = 0.025, test = 0.05})[q]
+local dx = ({paper = 0.01, preview = 0.04, test = 0.05})[q]
 local g = 0.05   -- ground height
 local cx, cz = 1.7, 1.0
 local objects = {
@@ -23,7 +23,7 @@ objects[#objects + 1] = { shape = { type = "sphere", center = {cx - 1.2, g + 0.4
 return {
   integrator = params.explicit and "explicit" or "implicit",
   dim = 3, dx = dx, ppc = 8,
-  fps = (q == "test") and 24 or 72, frames = (q == "test") and 2 or 144,
+  fps = (q == "test") and 24 or 72, frames = (q == "test") and 2 or ((q == "paper") and 144 or 72),
   max_dt = 1e-3,
   domain = { min = {0, 0, 0}, max = {3.0, 1.4, 2.0} },
   materials = {

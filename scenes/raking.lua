@@ -6,7 +6,7 @@
 -- down, back). Sand: rho 2200, E 3.537e5, nu 0.3, hardening 35/9/0.2/10. Rake: slip, friction 0.2.
 -- Preview quality uses a 0.5 m box, 3 cm deep.
 local q = params.quality
-local dx = ({paper = 0.0045, preview = 0.01, test = 0.025})[q]
+local dx = ({paper = 0.0045, preview = 0.012, test = 0.025})[q]
 local L = (q == "paper") and 0.9 or 0.5
 local depth = (q == "paper") and 0.054 or 0.03
 local floor = 0.03

@@ -6,7 +6,7 @@
 -- tilted up, lifted and carried sideways. Sand: rho 2200, E 3.537e5, nu 0.3, hardening
 -- 35/9/0.2/10. Shovel: separate (sand may fall off but never passes through), friction 0.5.
 local q = params.quality
-local dx = ({paper = 0.005, preview = 0.012, test = 0.03})[q]
+local dx = ({paper = 0.005, preview = 0.015, test = 0.03})[q]
 local th = math.max(0.008, 1.5 * dx)      -- plate thickness: at least 1.5 cells
 local floor = 0.02
 local depth = 0.07
@@ -20,7 +20,7 @@ local s = floor + depth
 return {
   dim = 3, dx = dx, ppc = (q == "paper") and 8 or 4,
   fps = 24, frames = (q == "test") and 2 or 132,
-  max_dt = 1e-4,
+  max_dt = (q == "paper") and 1e-4 or 2.5e-4,   -- preview: the elastic-wave bound limits dt anyway
   domain = { min = {-0.4, 0, -0.25}, max = {0.4, 0.5, 0.25} },
   materials = {
     sand = { model = "sand", density = 2200, E = 3.537e5, nu = 0.3, hardening = {35, 9, 0.2, 10} },

@@ -12,8 +12,12 @@
 
 #if SM_DOUBLE
 #define JVP_TOL 1e-5
+#define NEWTON_FLOOR 1e-8
 #else
 #define JVP_TOL 3e-2
+/* float residuals stall near 2e-4 m/s^2 (measured), 1e-4 of the first: only the first Newton step
+ * is above that floor, so only it is checked for the quadratic bound in float builds. */
+#define NEWTON_FLOOR 2e-3
 #endif
 
 #define DX(dim) ((dim) == 2 ? 0.02 : 0.04)
@@ -98,7 +102,7 @@ int main(void) {
             int checked = 0;
             for (int i = 0; i + 1 <= n && i + 1 < 64; i++) {
                 double r = w->newton_hist[i], r1 = w->newton_hist[i + 1];
-                if (r < 1e-8 * r0) break; /* near rounding level */
+                if (r < NEWTON_FLOOR * r0) break; /* at the precision's rounding floor */
                 CHECK(r1 <= 10.0 * r * r / r0);
                 checked++;
             }

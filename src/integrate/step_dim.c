@@ -109,6 +109,15 @@ static inline uint32_t particle_block(const sm_world *w, const sm_step_ctx *c, c
     return (uint32_t)sm_grid_block_id(&w->grid, bb[0], bb[1], bb[2]);
 }
 
+/* Block coordinates of block id b, and its colour (block coordinates mod 2). */
+static inline int block_color(const sm_grid *g, size_t b, int *bi, int *bj, int *bk) {
+    *bk = (int)(b % (size_t)g->blocks[2]);
+    size_t r = b / (size_t)g->blocks[2];
+    *bj = (int)(r % (size_t)g->blocks[1]);
+    *bi = (int)(r / (size_t)g->blocks[1]);
+    return (*bi & 1) | ((*bj & 1) << 1) | ((D == 3 ? (*bk & 1) : 0) << 2);
+}
+
 static void SM_FN(sort)(sm_world *w, const sm_step_ctx *c) {
     sm_grid *g = &w->grid;
     const size_t n = w->p.n;
@@ -139,12 +148,8 @@ static void SM_FN(sort)(sm_world *w, const sm_step_ctx *c) {
     memset(w->color_count, 0, sizeof w->color_count);
     for (size_t b = 0; b < g->nblocks; b++) {
         if (start[b + 1] == start[b]) continue;
-        int bk = (int)(b % (size_t)g->blocks[2]);
-        size_t r = b / (size_t)g->blocks[2];
-        int bj = (int)(r % (size_t)g->blocks[1]);
-        int bi = (int)(r / (size_t)g->blocks[1]);
-        int color = (bi & 1) | ((bj & 1) << 1) | ((D == 3 ? (bk & 1) : 0) << 2);
-        w->color_count[color]++;
+        int bi, bj, bk;
+        w->color_count[block_color(g, b, &bi, &bj, &bk)]++;
         for (int di = 0; di < 2; di++)
             for (int dj = 0; dj < 2; dj++)
                 for (int dk = 0; dk < (D == 3 ? 2 : 1); dk++) {
@@ -159,12 +164,8 @@ static void SM_FN(sort)(sm_world *w, const sm_step_ctx *c) {
     for (int col = 0; col < 8; col++) cursor[col] = w->color_offset[col];
     for (size_t b = 0; b < g->nblocks; b++) {
         if (start[b + 1] == start[b]) continue;
-        int bk = (int)(b % (size_t)g->blocks[2]);
-        size_t r = b / (size_t)g->blocks[2];
-        int bj = (int)(r % (size_t)g->blocks[1]);
-        int bi = (int)(r / (size_t)g->blocks[1]);
-        int color = (bi & 1) | ((bj & 1) << 1) | ((D == 3 ? (bk & 1) : 0) << 2);
-        w->color_blocks[cursor[color]++] = (uint32_t)b;
+        int bi, bj, bk;
+        w->color_blocks[cursor[block_color(g, b, &bi, &bj, &bk)]++] = (uint32_t)b;
     }
     sm_grid_prepare_active(g, c->threads);
 }
@@ -699,6 +700,24 @@ static void SM_FN(imp_residual)(sm_world *w, const sm_step_ctx *c, const sm_real
     }
 }
 
+/* out = v^n + FORCE_INCREMENT_VEL(z) = v^n + dt g - (dt/m) sum_p G_p(z) grad w (nodes with mass). */
+static void SM_FN(imp_force_increment)(sm_world *w, const sm_step_ctx *c, const sm_real *z, sm_real *out, size_t nodes) {
+    const sm_implicit_ws *ws = &w->imp;
+    const sm_real dt = (sm_real)c->dt;
+    SM_FN(imp_forces)(w, c, z, 0, nodes);
+    for (size_t l = 0; l < nodes; l++)
+        for (int a = 0; a < D; a++)
+            out[l * D + a] = ws->mass[l] > 0 ? ws->vn[l * D + a] + dt * c->gravity[a] - dt / ws->mass[l] * ws->force[l * D + a] : 0;
+}
+
+/* NONLINEAR_FUNCTION at z (already collided): y = pruned residual; returns sum m |y|^2. */
+static double SM_FN(imp_residual_norm2)(sm_world *w, const sm_step_ctx *c, const sm_real *z, sm_real *y, size_t nodes) {
+    SM_FN(imp_forces)(w, c, z, 0, nodes);
+    SM_FN(imp_residual)(w, c, z, y, nodes);
+    SM_FN(imp_project)(w, c, y, nodes, 1);
+    return SM_FN(imp_dot)(w, y, y, c->threads);
+}
+
 /* TIMES_DIFF (Algorithm 6): out = P(x' + (dt^2/m) sum_p apply_p(T1_p) grad w), x' = P x. */
 static void SM_FN(imp_times_diff)(sm_world *w, const sm_step_ctx *c, const sm_real *x, sm_real *out, size_t nodes) {
     sm_implicit_ws *ws = &w->imp;
@@ -809,22 +828,13 @@ static sm_status SM_FN(implicit_grid)(sm_world *w, const sm_step_ctx *c) {
      * at time steps well above the explicit limit that predictor is itself unstable (its residual
      * measured 1e8 m/s^2 on an elastic block at 10x the limit, and Newton never recovered), so we
      * start from whichever of it and v^n + dt g has the smaller residual. */
-    SM_FN(imp_forces)(w, c, ws->vn, 0, nodes);
-    for (size_t l = 0; l < nodes; l++)
-        for (int a = 0; a < D; a++)
-            ws->z[l * D + a] = ws->mass[l] > 0 ? ws->vn[l * D + a] + dt * c->gravity[a] - dt / ws->mass[l] * ws->force[l * D + a] : 0;
+    SM_FN(imp_force_increment)(w, c, ws->vn, ws->z, nodes);
     SM_FN(imp_collide)(w, c, ws->z, nodes);
-    SM_FN(imp_forces)(w, c, ws->z, 0, nodes);
-    SM_FN(imp_residual)(w, c, ws->z, ws->y, nodes);
-    SM_FN(imp_project)(w, c, ws->y, nodes, 1);
-    double r_explicit = SM_FN(imp_dot)(w, ws->y, ws->y, c->threads);
+    double r_explicit = SM_FN(imp_residual_norm2)(w, c, ws->z, ws->y, nodes);
     for (size_t l = 0; l < nodes; l++)
         for (int a = 0; a < D; a++) ws->dz[l * D + a] = ws->mass[l] > 0 ? ws->vn[l * D + a] + dt * c->gravity[a] : 0;
     SM_FN(imp_collide)(w, c, ws->dz, nodes);
-    SM_FN(imp_forces)(w, c, ws->dz, 0, nodes);
-    SM_FN(imp_residual)(w, c, ws->dz, ws->y, nodes);
-    SM_FN(imp_project)(w, c, ws->y, nodes, 1);
-    if (SM_FN(imp_dot)(w, ws->y, ws->y, c->threads) < r_explicit) memcpy(ws->z, ws->dz, nodes * D * sizeof(sm_real));
+    if (SM_FN(imp_residual_norm2)(w, c, ws->dz, ws->y, nodes) < r_explicit) memcpy(ws->z, ws->dz, nodes * D * sizeof(sm_real));
     SM_FN(imp_collide)(w, c, ws->z, nodes);
     const double tol = w->def.newton_tolerance * c->dt;
     int it = 0;
@@ -849,10 +859,7 @@ static sm_status SM_FN(implicit_grid)(sm_world *w, const sm_step_ctx *c) {
             for (size_t k = 0; k < nodes * D; k++) ws->z[k] = z0[k] + (sm_real)step * ws->dz[k];
             SM_FN(imp_collide)(w, c, ws->z, nodes);
             if (ls == 5) break;
-            SM_FN(imp_forces)(w, c, ws->z, 0, nodes);
-            SM_FN(imp_residual)(w, c, ws->z, ws->tmp, nodes);
-            SM_FN(imp_project)(w, c, ws->tmp, nodes, 1);
-            double an = sqrt(SM_FN(imp_dot)(w, ws->tmp, ws->tmp, c->threads) / (msum > 0 ? msum : 1));
+            double an = sqrt(SM_FN(imp_residual_norm2)(w, c, ws->z, ws->tmp, nodes) / (msum > 0 ? msum : 1));
             if (an < a_norm || an < tol) break;
             step *= 0.5;
         }
@@ -864,13 +871,10 @@ static sm_status SM_FN(implicit_grid)(sm_world *w, const sm_step_ctx *c) {
     if (!isfinite(a_norm))
         return sm_world_fail(w, SM_ERR_NUMERICAL, "step %llu (t = %.6g s, dt = %.3g s): the implicit solve diverged (residual %g)",
                              (unsigned long long)w->steps + 1, w->time, c->dt, a_norm);
-    /* v-bar = z; v* = v^n + FORCE_INCREMENT_VEL(v-bar) (ws->force holds sum G(z) grad w after the last
-     * evaluation at z); dv = GRID_COLLISIONS(v*) - v*; v-tilde = FRICTION(v-bar, dv). */
-    SM_FN(imp_forces)(w, c, ws->z, 0, nodes);
+    /* v-bar = z; v* = v^n + FORCE_INCREMENT_VEL(v-bar); dv = GRID_COLLISIONS(v*) - v*;
+     * v-tilde = FRICTION(v-bar, dv). */
     sm_real *vstar = ws->tmp;
-    for (size_t l = 0; l < nodes; l++)
-        for (int a = 0; a < D; a++)
-            vstar[l * D + a] = ws->mass[l] > 0 ? ws->vn[l * D + a] + dt * c->gravity[a] - dt / ws->mass[l] * ws->force[l * D + a] : 0;
+    SM_FN(imp_force_increment)(w, c, ws->z, vstar, nodes);
     memcpy(ws->dz, vstar, nodes * D * sizeof(sm_real));
     SM_FN(imp_collide)(w, c, ws->dz, nodes); /* records of this call drive FRICTION */
     const int static_sticks = w->def.static_friction_sticks;

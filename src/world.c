@@ -48,7 +48,6 @@ sm_status sm_world_fail(sm_world *w, sm_status status, const char *fmt, ...) {
 const char *sm_world_errmsg(const sm_world *w) { return w ? w->err : "no world"; }
 
 void sm_implicit_ws_free(sm_implicit_ws *ws) {
-    free(ws->bmap);
     free(ws->partial);
     free(ws->mass);
     free(ws->vn);
@@ -138,8 +137,8 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
                 snprintf(msg, sizeof msg, "domain: at least 6 cells needed along axis %c, got %.0f (length %g, dx %g)", "xyz"[a], cells, len, def->dx);
                 break;
             }
-            if (cells > 65536) {
-                snprintf(msg, sizeof msg, "domain: %.0f cells along axis %c is more than 65536", cells, "xyz"[a]);
+            if (cells > 4194304) {
+                snprintf(msg, sizeof msg, "domain: %.0f cells along axis %c is more than 4194304", cells, "xyz"[a]);
                 break;
             }
         }
@@ -148,7 +147,7 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
         if (err && errlen) snprintf(err, errlen, "%s", msg);
         return SM_ERR_INVALID;
     }
-    sm_world *w = calloc(1, sizeof *w);
+    sm_world *w = sm_calloc(1, sizeof *w);
     if (!w) {
         if (err && errlen) snprintf(err, errlen, "out of memory");
         return SM_ERR_NOMEM;
@@ -170,29 +169,10 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
             w->def.gravity[a] = 0;
         }
     }
-    double nn = 1;
-    for (int a = 0; a < def->dim; a++) nn *= nodes[a] + 4;
-    double bytes = nn * (double)sizeof(sm_real) * (1 + 3 * def->dim);
-    if (bytes > 16e9) {
-        if (err && errlen) snprintf(err, errlen, "domain: the grid would need %.1f GB; use a larger dx or a smaller domain", bytes / 1e9);
-        free(w);
-        return SM_ERR_INVALID;
-    }
-    if (sm_grid_init(&w->grid, def->dim, nodes) != SM_OK) {
-        if (err && errlen) snprintf(err, errlen, "out of memory allocating the grid (%.1f MB)", bytes / 1e6);
-        free(w);
-        return SM_ERR_NOMEM;
-    }
-    w->block_start = calloc(w->grid.nblocks + 1, sizeof(uint32_t));
-    w->color_blocks = calloc(w->grid.nblocks, sizeof(uint32_t));
-    if (!w->block_start || !w->color_blocks) {
-        sm_world_destroy(w);
-        if (err && errlen) snprintf(err, errlen, "out of memory");
-        return SM_ERR_NOMEM;
-    }
+    sm_grid_init(&w->grid, def->dim, nodes);
     w->threads = resolve_threads(def->threads);
     /* Domain walls: half-spaces 2 cells inside each face, behaving as def->wall_mode. */
-    w->colliders = calloc((size_t)(2 * def->dim + 4), sizeof *w->colliders);
+    w->colliders = sm_calloc((size_t)(2 * def->dim + 4), sizeof *w->colliders);
     if (!w->colliders) {
         sm_world_destroy(w);
         if (err && errlen) snprintf(err, errlen, "out of memory");
@@ -217,17 +197,32 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
 }
 
 size_t sm_world_def_grid_bytes(const sm_world_def *def) {
+    /* The grid is sparse: its blocks follow the particles (counted in sm_particle_bytes); what
+     * does not depend on the particles is the per-thread transfer caches. */
     if (!def || (def->dim != 2 && def->dim != 3) || !(def->dx > 0)) return 0;
-    double blocks = 1;
-    for (int a = 0; a < def->dim; a++) {
-        double len = def->domain_max[a] - def->domain_min[a];
-        if (!(len > 0)) return 0;
-        double nodes = ceil(len / def->dx - 1e-9) + 1;
-        blocks *= ceil(nodes / SM_BLOCK);
-    }
-    double nodes = blocks * (def->dim == 2 ? SM_BLOCK * SM_BLOCK : SM_BLOCK * SM_BLOCK * SM_BLOCK);
-    double bytes = nodes * (double)sizeof(sm_real) * (1 + 3 * def->dim) + blocks * (1 + 3 * sizeof(uint32_t) + 4);
-    return bytes > 1e18 ? (size_t)-1 : (size_t)bytes;
+    for (int a = 0; a < def->dim; a++)
+        if (!(def->domain_max[a] > def->domain_min[a])) return 0;
+    size_t side = def->dim == 2 ? SM_CACHE_SIDE * SM_CACHE_SIDE : SM_CACHE_SIDE * SM_CACHE_SIDE * SM_CACHE_SIDE;
+    return (size_t)resolve_threads(def->threads) * side * SM_LANES * sizeof(sm_real) + sizeof(sm_world);
+}
+
+size_t sm_world_memory_bytes(const sm_world *w) {
+    const sm_particles *P = &w->p;
+    const size_t d = (size_t)w->dim, dd = d * d;
+    size_t b = sizeof *w;
+    b += P->cap * (sizeof(sm_real) * (2 * d + 3 * dd + 4) + sizeof(uint16_t));
+    b += w->perm_cap * 2 * sizeof(uint32_t);
+    b += sm_grid_bytes(&w->grid);
+    b += w->pb_cap * sizeof(sm_pblock) + w->pb_hash.cap * (sizeof(uint64_t) + sizeof(uint32_t));
+    b += w->pb_scratch_cap * sizeof(uint32_t) + w->sort_keys_cap * sizeof(uint64_t) + w->color_cap * sizeof(uint32_t);
+    b += w->cache_cap * sizeof(sm_real);
+    b += (size_t)w->mats_cap * sizeof(sm_material_rt) + (size_t)w->colliders_cap * sizeof(sm_collider);
+    b += (size_t)w->emitters_cap * sizeof(sm_emitter);
+    const sm_implicit_ws *ws = &w->imp;
+    b += ws->ncap * sizeof(sm_real) * (1 + 6 * d) + (size_t)ws->kcap * ws->ncap * d * sizeof(sm_real);
+    b += ws->ncap * sizeof(sm_node_contact) + ws->pcap * (sizeof(sm_implicit_particle) + dd * sizeof(sm_real));
+    b += ws->partial_cap * sizeof(double);
+    return b;
 }
 
 void sm_world_destroy(sm_world *w) {
@@ -240,8 +235,12 @@ void sm_world_destroy(sm_world *w) {
     sm_implicit_ws_free(&w->imp);
     free(w->keys);
     free(w->perm);
-    free(w->block_start);
+    free(w->pb);
+    sm_block_hash_free(&w->pb_hash);
+    free(w->pb_scratch);
+    free(w->sort_keys);
     free(w->color_blocks);
+    free(w->cache);
     free(w);
 }
 
@@ -322,7 +321,7 @@ int sm_world_add_material(sm_world *w, const sm_material_def *m) {
     if (w->nmats >= 65535) return (sm_world_fail(w, SM_ERR_INVALID, "too many materials (65535)"), -1);
     if (w->nmats == w->mats_cap) {
         int cap = w->mats_cap ? 2 * w->mats_cap : 4;
-        sm_material_rt *q = realloc(w->mats, (size_t)cap * sizeof *q);
+        sm_material_rt *q = sm_realloc(w->mats, (size_t)cap * sizeof *q);
         if (!q) return (sm_world_fail(w, SM_ERR_NOMEM, "out of memory"), -1);
         w->mats = q;
         w->mats_cap = cap;
@@ -353,15 +352,15 @@ int sm_world_add_material(sm_world *w, const sm_material_def *m) {
 static sm_status reserve_particles(sm_world *w, size_t n) {
     if (w->def.max_particles && n > w->def.max_particles)
         return sm_world_fail(w, SM_ERR_INVALID, "particles: %zu would exceed max_particles = %zu", n, w->def.max_particles);
-    if (n > UINT32_MAX - 1) return sm_world_fail(w, SM_ERR_INVALID, "particles: at most %u supported", UINT32_MAX - 1);
+    if (n > 0x7fffffffu) return sm_world_fail(w, SM_ERR_INVALID, "particles: at most %u supported", 0x7fffffffu);
     if (sm_particles_reserve(&w->p, w->dim, n) != SM_OK)
         return sm_world_fail(w, SM_ERR_NOMEM, "out of memory for %zu particles", n);
     if (n > w->perm_cap) {
         size_t cap = w->p.cap;
-        uint32_t *k = realloc(w->keys, cap * sizeof(uint32_t));
+        uint32_t *k = sm_realloc(w->keys, cap * sizeof(uint32_t));
         if (!k) return sm_world_fail(w, SM_ERR_NOMEM, "out of memory");
         w->keys = k;
-        uint32_t *pm = realloc(w->perm, cap * sizeof(uint32_t));
+        uint32_t *pm = sm_realloc(w->perm, cap * sizeof(uint32_t));
         if (!pm) return sm_world_fail(w, SM_ERR_NOMEM, "out of memory");
         w->perm = pm;
         w->perm_cap = cap;
@@ -493,7 +492,7 @@ int sm_world_add_collider(sm_world *w, const sm_collider_def *c) {
     if (!(fabs(qn - 1) < 1e-6)) return (sm_world_fail(w, SM_ERR_INVALID, "collider pose.rotation: must be a unit quaternion"), -1);
     if (w->ncolliders + w->nwalls + 1 > w->colliders_cap) {
         int cap = 2 * (w->ncolliders + w->nwalls + 1);
-        sm_collider *q = realloc(w->colliders, (size_t)cap * sizeof *q);
+        sm_collider *q = sm_realloc(w->colliders, (size_t)cap * sizeof *q);
         if (!q) return (sm_world_fail(w, SM_ERR_NOMEM, "out of memory"), -1);
         w->colliders = q;
         w->colliders_cap = cap;
@@ -639,7 +638,11 @@ sm_status sm_world_step(sm_world *w, double dt) {
                                  "position, velocity or deformation gradient",
                                  (unsigned long long)w->steps + 1, w->time, pre, (int)w->p.mat[pre]);
         }
-        w->ops->sort(w, &c);
+        if (w->ops->sort(w, &c) != SM_OK) {
+            w->failed = 1;
+            return sm_world_fail(w, SM_ERR_NOMEM, "step %llu: out of memory for the grid and the particle sort",
+                                 (unsigned long long)w->steps + 1);
+        }
         t1 = sm_seconds();
         w->stage_seconds[SM_STAGE_SORT] += t1 - t0;
         const int implicit = (w->def.integrator == SM_INTEGRATOR_IMPLICIT);
@@ -816,7 +819,7 @@ uint64_t sm_world_state_hash(const sm_world *w) {
 double sm_world_debug_implicit_jvp(sm_world *w, double dt, uint64_t seed, double vscale, double h) {
     sm_step_ctx c;
     fill_ctx(w, dt, &c);
-    w->ops->sort(w, &c);
+    if (w->ops->sort(w, &c) != SM_OK) return INFINITY;
     w->ops->p2g(w, &c, 0);
     return w->ops->implicit_jvp_check(w, &c, seed, vscale, h);
 }
@@ -826,13 +829,12 @@ void sm_world_debug_transfer_roundtrip(sm_world *w, sm_transfer_totals *t) {
     fill_ctx(w, 0.0, &c);
     for (int a = 0; a < 3; a++) c.gravity[a] = 0;
     sm_world_particle_totals(w, &t->mass[0], t->mom[0], t->ang[0]);
-    w->ops->sort(w, &c);
+    if (w->ops->sort(w, &c) != SM_OK) return;
     w->ops->p2g(w, &c, 0);
     /* v^n = mv/m, and v-bar = v-tilde = v^n: no force, no gravity, no collision. */
     sm_grid *g = &w->grid;
     const size_t bn = (size_t)g->block_nodes, d = (size_t)w->dim;
-    for (size_t k = 0; k < g->nactive; k++) {
-        size_t b = g->active_list[k];
+    for (size_t b = 0; b < g->nactive; b++) {
         for (size_t ni = b * bn; ni < (b + 1) * bn; ni++)
             for (size_t a = 0; a < d; a++) {
                 sm_real v = g->m[ni] > 0 ? g->v[ni * d + a] / g->m[ni] : 0;

@@ -30,6 +30,19 @@ typedef struct sm_particles {
     uint16_t *mat;
 } sm_particles;
 
+/* A particle block: the particles whose stencil starts in grid block `key`. They touch nodes
+ * 4 b .. 4 b + 6 per axis only, i.e. the live grid blocks b + {0,1}^d: gslot[c] with
+ * c = (ci << 2 | cj << 1 | ck) in 3D, (ci << 1 | cj) in 2D (SM_NO_SLOT outside the domain). */
+typedef struct sm_pblock {
+    uint64_t key;
+    uint32_t start, end;    /* positions in perm */
+    uint32_t gslot[8];
+} sm_pblock;
+
+/* Transfer cache of one particle block: 8^d nodes (2^d grid blocks) of SM_LANES values. */
+#define SM_LANES 8
+#define SM_CACHE_SIDE 8
+
 /* An emitter and its bookkeeping. */
 typedef struct sm_emitter {
     sm_emitter_def def;
@@ -39,11 +52,9 @@ typedef struct sm_emitter {
     uint64_t emitted;         /* particles emitted so far */
 } sm_emitter;
 
-/* Workspace of the implicit integrator, grown as needed. Vectors are "compact": the nodes of the
- * active grid blocks in active-list order, d values per node. */
+/* Workspace of the implicit integrator, grown as needed. Vectors hold d values per node of the
+ * live grid blocks, in grid node order. */
 typedef struct sm_implicit_ws {
-    int32_t *bmap;              /* grid block -> position in the active list, or -1 */
-    size_t bmap_cap;
     size_t ncap;                /* capacity in nodes of the compact vectors */
     sm_real *mass, *vn, *z, *y, *dz, *tmp, *force, *krylov; /* krylov: (K+1) vectors */
     int kcap;                   /* Krylov vectors allocated */
@@ -51,7 +62,8 @@ typedef struct sm_implicit_ws {
     size_t pcap;                /* particle capacity */
     sm_implicit_particle *pp;   /* per-particle precompute (Algorithm 8) */
     sm_real *G;                 /* per-particle force matrices V0 Y(F) F^nT */
-    double *partial;            /* per-active-block partial sums (deterministic dot products) */
+    double *partial;            /* per-live-block partial sums (deterministic dot products) */
+    size_t partial_cap;
 } sm_implicit_ws;
 void sm_implicit_ws_free(sm_implicit_ws *ws);
 
@@ -67,8 +79,9 @@ typedef struct sm_step_ctx {
 /* Function table of one dimension (filled by step_dim.c for SM_DIM = 2 and 3). */
 typedef struct sm_dim_ops {
     int dim;
-    /* Bin particles by grid block: fills w->perm, w->block_* lists and the active grid blocks. */
-    void (*sort)(sm_world *w, const sm_step_ctx *c);
+    /* Bin particles by grid block: fills w->perm, the particle blocks, their colour lists and the
+     * live grid blocks (zeroed); reorders particle storage when that pays. */
+    sm_status (*sort)(sm_world *w, const sm_step_ctx *c);
     /* P2G: mass, momentum (APIC/PIC/FLIP), internal force from tau; with_force = 0 skips stress. */
     void (*p2g)(sm_world *w, const sm_step_ctx *c, int with_force);
     /* Grid update v* = v + dt (f/m + g), colliders and walls (v-bar), friction (v-tilde). */
@@ -115,13 +128,25 @@ struct sm_world {
 
     sm_grid grid;
 
-    /* Binning scratch, grown as needed, never shrunk. */
-    uint32_t *keys;         /* block id per particle */
-    uint32_t *perm;         /* particle indices sorted by block (stable) */
+    /* Binning (step_dim.c sort), grown as needed, never shrunk. Particles are binned by the grid
+     * block holding their stencil's first node ("particle blocks"). */
+    uint32_t *keys;         /* per particle during the sort: its particle block */
+    uint32_t *perm;         /* particle indices grouped by particle block (stable) */
     size_t perm_cap;
-    uint32_t *block_start;  /* per grid block: first position in perm (size nblocks + 1) */
-    uint32_t *color_blocks; /* particle blocks grouped by color */
+    sm_pblock *pb;          /* this step's non-empty particle blocks, ascending key */
+    size_t npb, pb_cap;
+    sm_block_hash pb_hash;  /* key -> index in pb */
+    uint32_t *pb_scratch;   /* sort scratch: per-thread counts and cursors, ranks */
+    size_t pb_scratch_cap;
+    uint64_t *sort_keys;    /* sort scratch: (key, index) pairs of blocks */
+    size_t sort_keys_cap;
+    uint32_t *color_blocks; /* particle blocks grouped by colour */
+    size_t color_cap;
     uint32_t color_count[8], color_offset[9];
+    sm_real *cache;         /* per-thread transfer caches (64-byte aligned) */
+    size_t cache_cap;       /* values */
+    int cache_threads;
+    uint64_t reorders;      /* times the particle storage was reordered by block */
 
     /* Time and statistics. */
     double time;

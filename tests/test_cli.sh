@@ -63,7 +63,7 @@ expect 2 "require" "$BIN" info "$TMP/req.lua"
 printf 'while true do end\n' > "$TMP/loop.lua"
 expect 2 "runaway loop" "$BIN" info "$TMP/loop.lua"
 has "$TMP/err" 'instruction limit' "instruction limit message"
-printf 'return { dim = 3, dx = 0.001, frames = 1, domain = { min = {0,0,0}, max = {20,20,20} } }\n' > "$TMP/huge.lua"
+printf 'return { dim = 3, dx = 0.001, frames = 1, domain = { min = {0,0,0}, max = {20,20,20} },\n  materials = { sand = { friction_angle = 30 } },\n  objects = { { material = "sand", shape = { type = "box", center = {10,10,10}, half_extent = {9,9,9} } } } }\n' > "$TMP/huge.lua"
 expect 2 "too large for memory" "$BIN" info "$TMP/huge.lua"
 has "$TMP/err" 'GB' "memory estimate in the message"
 expect 2 "missing scene" "$BIN" run "$TMP/nope.lua" --out "$TMP/never"
@@ -83,4 +83,44 @@ mkdir -p "$TMP/corrupt" && printf 'ply\nformat binary_little_endian 1.0\nelement
 expect 2 "render corrupt frame" "$BIN" render "$TMP/corrupt"
 
 echo "test_cli: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
+
+# bench: `sandmpm bench --csv` in this build's precision and, if the program of the other
+# precision (sandmpm-float / sandmpm-double, CMake SM_SIBLING) is next to this one, in that one
+# too: the exact header, one row per dimension and thread count, sane fields. No timing checks.
+# A copy of the program alone in a directory has no sibling: a note and exit 0 by default, exit 2
+# when the missing precision is asked for.
+own=$("$BIN" --version | sed -n 's/.*(\(float\|double\) precision).*/\1/p')
+if [ "$own" = double ]; then other=float; else other=double; fi
+[ -n "$own" ] && ok || bad "bench: no precision in --version"
+bench_csv() { # precision
+    expect 0 "bench --csv $1" "$BIN" bench --csv --particles 2000 --steps 2 --warmup 1 --dim 2,3 --threads 1,2 --precision "$1"
+    [ "$(head -1 "$TMP/out")" = "dim,precision,threads,particles,particle_steps_per_s,bytes_per_particle" ] && ok ||
+        bad "bench $1: header is \"$(head -1 "$TMP/out")\""
+    tail -n +2 "$TMP/out" > "$TMP/rows"
+    [ "$(wc -l < "$TMP/rows")" -eq 4 ] && ok || bad "bench $1: expected 4 rows, got: $(cat "$TMP/out")"
+    [ "$(cut -d, -f1,3 "$TMP/rows" | sort -u | wc -l)" -eq 4 ] && ok || bad "bench $1: dim/threads cases repeat: $(cat "$TMP/rows")"
+    awk -F, -v p="$1" 'NF != 6 || $1 !~ /^[23]$/ || $2 != p || $3 !~ /^[12]$/ || $4 !~ /^[0-9]+$/ || !($4 > 0) ||
+                       $5 !~ /^[0-9.e+]+$/ || !($5 > 0) || $6 !~ /^[0-9.e+]+$/ || !($6 > 0) { print "bad row: " $0; b = 1 }
+                       END { exit b }' "$TMP/rows" > "$TMP/bad_rows" && ok || bad "bench $1: $(cat "$TMP/bad_rows")"
+}
+bench_csv "$own"
+if [ -x "$(dirname "$BIN")/sandmpm-$other" ]; then bench_csv "$other"; else echo "test_cli: no sandmpm-$other, bench $other not tested"; fi
+expect 0 "bench table" "$BIN" bench --particles 500 --steps 1 --warmup 0 --dim 2 --threads 1 --precision "$own"
+has "$TMP/out" "p2g" "bench table has the stages"
+has "$TMP/out" "bytes/particle" "bench table has bytes per particle"
+expect 2 "bench unknown option" "$BIN" bench --frobnicate
+has "$TMP/err" '--frobnicate' "bench names the unknown option"
+expect 2 "bench threads 0" "$BIN" bench --threads 0
+expect 2 "bench dim 4" "$BIN" bench --dim 4
+expect 2 "bench precision half" "$BIN" bench --precision half
+expect 2 "bench steps 0" "$BIN" bench --steps 0
+mkdir -p "$TMP/solo" && cp "$BIN" "$TMP/solo/sandmpm"
+expect 0 "bench without sibling" "$TMP/solo/sandmpm" bench --csv --particles 500 --steps 1 --warmup 0 --dim 2 --threads 1
+has "$TMP/err" "note:" "bench notes the missing sibling"
+[ "$(tail -n +2 "$TMP/out" | cut -d, -f2 | sort -u)" = "$own" ] && ok || bad "bench without sibling: rows $(cat "$TMP/out")"
+expect 2 "bench without sibling, --precision $other" "$TMP/solo/sandmpm" bench --csv --particles 500 --steps 1 --precision "$other"
+has "$TMP/err" "$other" "bench names the missing precision"
+
+echo "test_cli (with bench): $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

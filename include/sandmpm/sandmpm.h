@@ -265,11 +265,21 @@ double sm_world_particle_friction_angle(const sm_world *w, size_t i);
 double sm_shape_volume_estimate(const sm_shape *shape, const sm_shape *clip, int dim, const double lo[3],
                                 const double hi[3]);
 
-/** Bytes per particle held by the library (state and per-step scratch), for memory estimates. */
+/** Bytes per particle held by the library (state, per-step scratch and the sparse grid's share),
+ *  for memory estimates. */
 size_t sm_particle_bytes(int dim);
 
-/** Bytes the grid of a world created from def would allocate (0 if def is invalid). */
+/** Bytes a world created from def needs besides what its particles cost (the grid is sparse and
+ *  grows with the particles; see sm_particle_bytes); 0 if def is invalid. */
 size_t sm_world_def_grid_bytes(const sm_world_def *def);
+
+/** Bytes of heap memory the world holds now: particle storage (by capacity), the grid's live
+ *  blocks and lookup tables, sort and step scratch, colliders, emitters, implicit workspace. */
+size_t sm_world_memory_bytes(const sm_world *w);
+
+/** Number of heap allocations (malloc, calloc, realloc) the library has made in this process,
+ *  all worlds together. Constant across steps once a simulation has reached its steady state. */
+uint64_t sm_allocation_count(void);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Emitters                                                                                     */

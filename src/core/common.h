@@ -43,6 +43,13 @@ void sm_assert_fail(const char *expr, const char *file, int line);
 #define SM_EPS 1.1920929e-07f
 #endif
 
+/* Counted heap allocation (src/core/error.c); release with free(). */
+void *sm_malloc(size_t n);
+void *sm_calloc(size_t n, size_t size);
+void *sm_realloc(void *p, size_t n);
+/* align: a power of two; n is rounded up to a multiple of it. */
+void *sm_aligned_alloc(size_t align, size_t n);
+
 #define SM_MIN(a, b) ((a) < (b) ? (a) : (b))
 #define SM_MAX(a, b) ((a) > (b) ? (a) : (b))
 #define SM_PI 3.14159265358979323846

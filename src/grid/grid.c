@@ -1,63 +1,86 @@
-/* Block-major grid storage; see grid.h. */
+/* Sparse block grid storage; see grid.h. */
 #include <string.h>
 
 #include "grid/grid.h"
 
-sm_status sm_grid_init(sm_grid *g, int dim, const int nodes[3]) {
-    memset(g, 0, sizeof *g);
-    g->dim = dim;
-    g->nblocks = 1;
-    for (int a = 0; a < 3; a++) {
-        g->nodes[a] = (a < dim) ? nodes[a] : 1;
-        g->blocks[a] = (a < dim) ? (nodes[a] + SM_BLOCK - 1) / SM_BLOCK : 1;
-        g->nblocks *= (size_t)g->blocks[a];
-    }
-    g->block_nodes = (dim == 2) ? SM_BLOCK * SM_BLOCK : SM_BLOCK * SM_BLOCK * SM_BLOCK;
-    size_t nn = g->nblocks * (size_t)g->block_nodes;
-    g->m = calloc(nn, sizeof(sm_real));
-    g->v = calloc(nn * (size_t)dim, sizeof(sm_real));
-    g->f = calloc(nn * (size_t)dim, sizeof(sm_real));
-    g->vt = calloc(nn * (size_t)dim, sizeof(sm_real));
-    g->active = calloc(g->nblocks, 1);
-    g->active_list = malloc(g->nblocks * sizeof(uint32_t));
-    if (!g->m || !g->v || !g->f || !g->vt || !g->active || !g->active_list) {
-        sm_grid_free(g);
-        return SM_ERR_NOMEM;
-    }
+sm_status sm_block_hash_reserve(sm_block_hash *h, size_t n) {
+    if (h->cap >= 2 * n && h->cap >= 16) return SM_OK;
+    size_t cap = 16;
+    while (cap < 2 * n) cap *= 2;
+    cap *= 2; /* headroom: growth stays rare */
+    uint64_t *k = sm_realloc(h->key, cap * sizeof *k);
+    if (!k) return SM_ERR_NOMEM;
+    h->key = k;
+    uint32_t *v = sm_realloc(h->val, cap * sizeof *v);
+    if (!v) return SM_ERR_NOMEM;
+    h->val = v;
+    h->cap = cap;
+    sm_block_hash_clear(h);
     return SM_OK;
 }
 
+void sm_block_hash_clear(sm_block_hash *h) {
+    if (h->cap) memset(h->key, 0xff, h->cap * sizeof *h->key);
+}
+
+void sm_block_hash_free(sm_block_hash *h) {
+    free(h->key);
+    free(h->val);
+    memset(h, 0, sizeof *h);
+}
+
+void sm_grid_init(sm_grid *g, int dim, const int nodes[3]) {
+    memset(g, 0, sizeof *g);
+    g->dim = dim;
+    for (int a = 0; a < 3; a++) {
+        g->nodes[a] = (a < dim) ? nodes[a] : 1;
+        g->blocks[a] = (a < dim) ? (nodes[a] + SM_BLOCK - 1) / SM_BLOCK : 1;
+    }
+    g->block_nodes = (dim == 2) ? SM_BLOCK * SM_BLOCK : SM_BLOCK * SM_BLOCK * SM_BLOCK;
+}
+
 void sm_grid_free(sm_grid *g) {
+    free(g->key);
     free(g->m);
     free(g->v);
     free(g->f);
     free(g->vt);
-    free(g->active);
-    free(g->active_list);
+    sm_block_hash_free(&g->hash);
     memset(g, 0, sizeof *g);
 }
 
 size_t sm_grid_bytes(const sm_grid *g) {
-    size_t nn = g->nblocks * (size_t)g->block_nodes;
-    return nn * sizeof(sm_real) * (1 + 3 * (size_t)g->dim) + g->nblocks * (1 + sizeof(uint32_t));
+    size_t nn = g->cap * (size_t)g->block_nodes;
+    return nn * sizeof(sm_real) * (1 + 3 * (size_t)g->dim) + g->cap * sizeof(uint64_t) +
+           g->hash.cap * (sizeof(uint64_t) + sizeof(uint32_t));
 }
 
-void sm_grid_clear_active(sm_grid *g) {
-    memset(g->active, 0, g->nblocks);
-    g->nactive = 0;
+sm_status sm_grid_reserve(sm_grid *g, size_t nblocks) {
+    if (sm_block_hash_reserve(&g->hash, nblocks) != SM_OK) return SM_ERR_NOMEM;
+    if (nblocks <= g->cap) return SM_OK;
+    size_t cap = g->cap ? g->cap : 64;
+    while (cap < nblocks) cap += cap / 2;
+    const size_t nn = cap * (size_t)g->block_nodes, d = (size_t)g->dim;
+    uint64_t *k = sm_realloc(g->key, cap * sizeof *k);
+    if (!k) return SM_ERR_NOMEM;
+    g->key = k;
+    sm_real **arr[4] = {&g->m, &g->v, &g->f, &g->vt};
+    for (int i = 0; i < 4; i++) {
+        sm_real *q = sm_realloc(*arr[i], nn * (i == 0 ? 1 : d) * sizeof(sm_real));
+        if (!q) return SM_ERR_NOMEM;
+        *arr[i] = q;
+    }
+    g->cap = cap;
+    return SM_OK;
 }
 
-void sm_grid_prepare_active(sm_grid *g, int threads) {
-    size_t n = 0;
-    for (size_t b = 0; b < g->nblocks; b++)
-        if (g->active[b]) g->active_list[n++] = (uint32_t)b;
-    g->nactive = n;
+void sm_grid_zero(sm_grid *g, int threads) {
     const size_t bn = (size_t)g->block_nodes, d = (size_t)g->dim;
-    long nb = (long)n;
+    long nb = (long)g->nactive;
     (void)threads;
 #pragma omp parallel for schedule(static) num_threads(threads)
     for (long t = 0; t < nb; t++) {
-        size_t b = g->active_list[t];
+        size_t b = (size_t)t;
         memset(g->m + b * bn, 0, bn * sizeof(sm_real));
         memset(g->v + b * bn * d, 0, bn * d * sizeof(sm_real));
         memset(g->f + b * bn * d, 0, bn * d * sizeof(sm_real));

@@ -1,13 +1,14 @@
-/* The background grid: nodes grouped in blocks of 4^d, stored block by block.
+/* The background grid: sparse, in blocks of 4^d nodes. Only blocks near particles live.
  *
- * Only blocks touched by particles are "active": cleared, updated and visited each step. The
- * block-major layout is what a sparse grid needs (blocks can later live in a page table or a hash
- * without changing the stages), and the block is the unit of the race-free P2G schedule: particle
- * blocks of one of the 2^d colours never write the same node (DESIGN §4).
+ * Node (i,j,k) sits at domain_min + (i,j,k) dx and belongs to block (i>>2, j>>2, k>>2). A block
+ * is named by its key (the three block coordinates packed in 21 bits each) and, while it lives,
+ * by its slot: the live blocks of a step are stored one after another in ascending key order,
+ * 4^d nodes each, so node index = slot * 4^d + local, local = li 16 + lj 4 + lk (3D) or li 4 + lj
+ * (2D). Memory and work follow the live blocks, not the domain: a large domain costs what its
+ * particles cost. A hash table maps keys to slots (rebuilt each step, grown only when needed).
  *
- * Node (i,j,k) sits at domain_min + (i,j,k) dx. Per node: mass, v (momentum during P2G, then
- * v^n), f (force during P2G, then v-bar), vt (v-tilde, the final velocity). Vectors are stored
- * per node (node*d + axis). */
+ * Per node: mass, v (momentum during P2G, then v^n), f (force during P2G, then v-bar), vt
+ * (v-tilde, the final velocity). Vectors are stored per node (node*d + axis). */
 #ifndef SM_GRID_H
 #define SM_GRID_H
 
@@ -16,59 +17,96 @@
 #define SM_BLOCK_BITS 2
 #define SM_BLOCK (1 << SM_BLOCK_BITS)
 #define SM_BLOCK_MASK (SM_BLOCK - 1)
+#define SM_KEY_BITS 21
+#define SM_KEY_MAX ((1 << SM_KEY_BITS) - 1) /* largest block coordinate */
+#define SM_NO_SLOT UINT32_MAX
 
-typedef struct sm_grid {
-    int dim;
-    int nodes[3];     /* nodes per axis (1 along z in 2D) */
-    int blocks[3];    /* blocks per axis (1 along z in 2D) */
-    size_t nblocks;
-    int block_nodes;  /* 4^d */
-    sm_real *m, *v, *f, *vt;
-    uint8_t *active;  /* per block */
-    uint32_t *active_list;
-    size_t nactive;
-} sm_grid;
-
-sm_status sm_grid_init(sm_grid *g, int dim, const int nodes[3]);
-void sm_grid_free(sm_grid *g);
-/* Bytes held by the grid arrays. */
-size_t sm_grid_bytes(const sm_grid *g);
-
-static inline size_t sm_grid_block_id(const sm_grid *g, int bi, int bj, int bk) {
-    return ((size_t)bi * (size_t)g->blocks[1] + (size_t)bj) * (size_t)g->blocks[2] + (size_t)bk;
+static inline uint64_t sm_block_key(int bi, int bj, int bk) {
+    return ((uint64_t)(uint32_t)bi << (2 * SM_KEY_BITS)) | ((uint64_t)(uint32_t)bj << SM_KEY_BITS) | (uint64_t)(uint32_t)bk;
 }
 
-/* Index of node (i,j,k) in the block-major arrays. */
-static inline size_t sm_grid_node(const sm_grid *g, int i, int j, int k) {
-    size_t b = sm_grid_block_id(g, i >> SM_BLOCK_BITS, j >> SM_BLOCK_BITS, k >> SM_BLOCK_BITS);
-    unsigned local = (unsigned)(((i & SM_BLOCK_MASK) << (2 * SM_BLOCK_BITS)) |
-                                ((j & SM_BLOCK_MASK) << SM_BLOCK_BITS) | (k & SM_BLOCK_MASK));
-    if (g->dim == 2) local = (unsigned)(((i & SM_BLOCK_MASK) << SM_BLOCK_BITS) | (j & SM_BLOCK_MASK));
-    return b * (size_t)g->block_nodes + local;
+static inline void sm_block_coords(uint64_t key, int b[3]) {
+    b[0] = (int)(key >> (2 * SM_KEY_BITS));
+    b[1] = (int)((key >> SM_KEY_BITS) & SM_KEY_MAX);
+    b[2] = (int)(key & SM_KEY_MAX);
 }
 
-/* Grid coordinates (i,j,k) of a node index. */
-static inline void sm_grid_node_coords(const sm_grid *g, size_t node, int ijk[3]) {
-    size_t b = node / (size_t)g->block_nodes;
-    unsigned local = (unsigned)(node % (size_t)g->block_nodes);
-    int bk = (int)(b % (size_t)g->blocks[2]);
-    size_t r = b / (size_t)g->blocks[2];
-    int bj = (int)(r % (size_t)g->blocks[1]);
-    int bi = (int)(r / (size_t)g->blocks[1]);
-    if (g->dim == 2) {
-        ijk[0] = (bi << SM_BLOCK_BITS) | (int)(local >> SM_BLOCK_BITS);
-        ijk[1] = (bj << SM_BLOCK_BITS) | (int)(local & SM_BLOCK_MASK);
-        ijk[2] = 0;
-    } else {
-        ijk[0] = (bi << SM_BLOCK_BITS) | (int)(local >> (2 * SM_BLOCK_BITS));
-        ijk[1] = (bj << SM_BLOCK_BITS) | (int)((local >> SM_BLOCK_BITS) & SM_BLOCK_MASK);
-        ijk[2] = (bk << SM_BLOCK_BITS) | (int)(local & SM_BLOCK_MASK);
+/* Open-addressing hash table from block keys to 32-bit values; capacity a power of two, at
+ * least twice the entries. */
+typedef struct sm_block_hash {
+    uint64_t *key; /* UINT64_MAX = empty */
+    uint32_t *val;
+    size_t cap;
+} sm_block_hash;
+
+/* Makes room for n entries (grows and clears when the capacity is too small). */
+sm_status sm_block_hash_reserve(sm_block_hash *h, size_t n);
+void sm_block_hash_clear(sm_block_hash *h);
+void sm_block_hash_free(sm_block_hash *h);
+
+static inline size_t sm_block_hash_pos(const sm_block_hash *h, uint64_t key) {
+    return (size_t)((key * 0x9E3779B97F4A7C15ULL) >> 20) & (h->cap - 1);
+}
+
+/* Value stored for key, or SM_NO_SLOT. */
+static inline uint32_t sm_block_hash_find(const sm_block_hash *h, uint64_t key) {
+    if (!h->cap) return SM_NO_SLOT;
+    for (size_t i = sm_block_hash_pos(h, key);; i = (i + 1) & (h->cap - 1)) {
+        if (h->key[i] == key) return h->val[i];
+        if (h->key[i] == UINT64_MAX) return SM_NO_SLOT;
     }
 }
 
-/* Clears the active flags (call before marking a new step's blocks). */
-void sm_grid_clear_active(sm_grid *g);
-/* Builds active_list (ascending block id) from the flags and zeroes those blocks' nodes. */
-void sm_grid_prepare_active(sm_grid *g, int threads);
+/* Inserts key -> val unless key is present; returns the value stored for key. The table must
+ * have room (sm_block_hash_reserve). */
+static inline uint32_t sm_block_hash_put(sm_block_hash *h, uint64_t key, uint32_t val) {
+    for (size_t i = sm_block_hash_pos(h, key);; i = (i + 1) & (h->cap - 1)) {
+        if (h->key[i] == key) return h->val[i];
+        if (h->key[i] == UINT64_MAX) {
+            h->key[i] = key;
+            h->val[i] = val;
+            return val;
+        }
+    }
+}
+
+typedef struct sm_grid {
+    int dim;
+    int nodes[3];     /* nodes per axis of the domain (1 along z in 2D) */
+    int blocks[3];    /* blocks per axis of the domain (1 along z in 2D) */
+    int block_nodes;  /* 4^d */
+    size_t nactive;   /* live blocks this step (slots 0 .. nactive-1) */
+    size_t cap;       /* blocks allocated */
+    uint64_t *key;    /* per slot, ascending */
+    sm_real *m, *v, *f, *vt;
+    sm_block_hash hash; /* key -> slot of the live blocks */
+} sm_grid;
+
+/* An empty grid for a domain of nodes[] nodes; no block storage yet. */
+void sm_grid_init(sm_grid *g, int dim, const int nodes[3]);
+void sm_grid_free(sm_grid *g);
+/* Bytes held by the grid (allocated blocks and the hash table). */
+size_t sm_grid_bytes(const sm_grid *g);
+/* Makes room for nblocks live blocks (grows geometrically; never shrinks). */
+sm_status sm_grid_reserve(sm_grid *g, size_t nblocks);
+/* Zeroes m, v, f of the live blocks. */
+void sm_grid_zero(sm_grid *g, int threads);
+
+/* Grid coordinates (i,j,k) of a node index. */
+static inline void sm_grid_node_coords(const sm_grid *g, size_t node, int ijk[3]) {
+    size_t slot = node / (size_t)g->block_nodes;
+    unsigned local = (unsigned)(node % (size_t)g->block_nodes);
+    int b[3];
+    sm_block_coords(g->key[slot], b);
+    if (g->dim == 2) {
+        ijk[0] = (b[0] << SM_BLOCK_BITS) | (int)(local >> SM_BLOCK_BITS);
+        ijk[1] = (b[1] << SM_BLOCK_BITS) | (int)(local & SM_BLOCK_MASK);
+        ijk[2] = 0;
+    } else {
+        ijk[0] = (b[0] << SM_BLOCK_BITS) | (int)(local >> (2 * SM_BLOCK_BITS));
+        ijk[1] = (b[1] << SM_BLOCK_BITS) | (int)((local >> SM_BLOCK_BITS) & SM_BLOCK_MASK);
+        ijk[2] = (b[2] << SM_BLOCK_BITS) | (int)(local & SM_BLOCK_MASK);
+    }
+}
 
 #endif

@@ -14,12 +14,24 @@
  *   plasticity   Algorithm 2: SVD, PROJECT, hardening (3.78)-(3.80); then the Kirchhoff stress
  *                tau = U diag(2 mu ln s + lambda tr ln s) U^T for the next P2G (tau = P F^T).
  *
- * Race-free scatter (DESIGN §4): particles are binned by the 4^d grid block holding their stencil's
- * first node; a block's particles write nodes [4b, 4b+6] per axis only, so blocks of the same colour
- * (block coordinates equal mod 2) never share a node. Colours run one after another, blocks of a
- * colour in parallel, particles of a block in index order: every node sums its contributions in
- * the same order for any thread count, so results are bitwise identical. */
+ * Sparse grid and race-free scatter (DESIGN §4): particles are binned by the 4^d grid block
+ * holding their stencil's first node (a "particle block"); its particles write nodes
+ * 4b .. 4b+6 per axis only, i.e. the 2^d grid blocks b + {0,1}^d, which are exactly the live
+ * blocks (grid.h). Blocks of the same colour (block coordinates equal mod 2) never share a node.
+ * P2G accumulates a particle block into a dense per-thread cache of 8^d nodes (the 2^d grid
+ * blocks) with SM_LANES values per node, then adds the cache into the grid; colours run one
+ * after another, blocks of a colour in parallel, particles of a block in order: every node sums
+ * its contributions in the same order for any thread count, so results are bitwise identical.
+ * G2P gathers the same 2^d grid blocks into the cache, then interpolates from it.
+ *
+ * The per-node work uses GCC/Clang vector extensions (one SM_LANES-wide vector per node) and
+ * the separable structure of the weights: the contribution of particle p to node (s0,s1,s2) is
+ *   w0 w1 w2 A + w1 w2 (w0 dp0 Cx + dw0 Vx) + w0 w2 (w1 dp1 Cy + dw1 Vy) + w0 w1 (w2 dp2 Cz + dw2 Vz)
+ * with A = (m, m v, 0), C_e = (0, column e of m C, 0), V_e = (0, 0, column e of -V0 tau). */
 #include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "material/implicit.h"
 #include "material/material.h"
@@ -35,186 +47,450 @@
 #if D == 2
 #define SM_FN(name) name##_2d
 #define NCOLORS 4
+#define NCACHE (SM_CACHE_SIDE * SM_CACHE_SIDE)
 #else
 #define SM_FN(name) name##_3d
 #define NCOLORS 8
+#define NCACHE (SM_CACHE_SIDE * SM_CACHE_SIDE * SM_CACHE_SIDE)
 #endif
+#define BN (D == 2 ? 16 : 64) /* nodes per grid block */
+#define NGB (1 << D)          /* grid blocks per particle block */
 
-/* Weights of one particle: per axis, S nodes starting at base. */
+typedef sm_real vec __attribute__((vector_size(SM_LANES * sizeof(sm_real))));
+
+/* Weights of one particle: per axis, S nodes starting at lb (relative to the particle block's
+ * first node, 0..3). */
 typedef struct weights {
-    int base[D];
+    int lb[D];
     sm_real w[D][4];
     sm_real dw[D][4]; /* derivative w.r.t. position (already times 1/dx) */
     sm_real dp[D][4]; /* x_i - x_p per axis, m */
-    size_t off[D][4]; /* per-axis part of the node index: index = off[0][s0] + off[1][s1] (+ off[2][s2]) */
 } weights;
 
-/* The block-major node index separates into a sum of per-axis terms (see grid.h):
- * ((bi B1 + bj) B2 + bk) N + local, local = li 16 + lj 4 + lk (3D) or li 4 + lj (2D). */
 static inline __attribute__((always_inline)) void kernel_weights(int S, const sm_real *xp, const sm_step_ctx *c,
-                                                                 const sm_grid *g, weights *W) {
-#if D == 2
-    const size_t stride[2] = {(size_t)g->blocks[1] * 16, 16};
-    const unsigned lmul[2] = {4, 1};
-#else
-    const size_t stride[3] = {(size_t)g->blocks[1] * (size_t)g->blocks[2] * 64, (size_t)g->blocks[2] * 64, 64};
-    const unsigned lmul[3] = {16, 4, 1};
-#endif
+                                                                 const int bc[3], weights *W) {
     for (int a = 0; a < D; a++) {
         sm_real X = (xp[a] - c->lo[a]) * c->inv_dx;
         int b = sm_kernel_1d(S, X, W->w[a], W->dw[a]);
-        W->base[a] = b;
+        W->lb[a] = b - (bc[a] << SM_BLOCK_BITS);
         for (int k = 0; k < 4; k++) {
-            int node = b + k;
             W->dw[a][k] *= c->inv_dx;
-            W->dp[a][k] = ((sm_real)node - X) * c->dx;
-            W->off[a][k] = (size_t)(node >> SM_BLOCK_BITS) * stride[a] + (size_t)(node & SM_BLOCK_MASK) * lmul[a];
+            W->dp[a][k] = ((sm_real)(b + k) - X) * c->dx;
         }
     }
 }
 
 static inline int stencil_size(const sm_world *w) { return w->def.kernel == SM_KERNEL_CUBIC ? 4 : 3; }
 
-/* Iterate over the stencil: defines node index `ni`, weight `wgt`, gradient `gw[D]` and offset
- * `dpos[D]` = x_i - x_p (m). */
+/* Grid node index of stencil node s (per axis) of a particle of block pb. */
+static inline size_t stencil_node(const sm_pblock *pb, const weights *W, const int *s) {
+    unsigned cb = 0, local = 0;
+    for (int a = 0; a < D; a++) {
+        int node = W->lb[a] + s[a];
+        cb = (cb << 1) | (unsigned)(node >> SM_BLOCK_BITS);
+        local = (local << SM_BLOCK_BITS) | (unsigned)(node & SM_BLOCK_MASK);
+    }
+    return (size_t)pb->gslot[cb] * BN + local;
+}
+
+/* Generic stencil loop (implicit integrator): node index `ni`, weight `wgt`, gradient `gw[D]`. */
 #if D == 2
-#define STENCIL_BEGIN(S, W, g, c)                                                              \
+#define STENCIL_BEGIN(S, W, pb)                                                                \
     for (int s0 = 0; s0 < (S); s0++)                                                           \
         for (int s1 = 0; s1 < (S); s1++) {                                                     \
-            size_t ni = (W).off[0][s0] + (W).off[1][s1];                                       \
+            const int ss_[2] = {s0, s1};                                                       \
+            size_t ni = stencil_node((pb), &(W), ss_);                                         \
             sm_real wgt = (W).w[0][s0] * (W).w[1][s1];                                         \
-            sm_real gw[2] = {(W).dw[0][s0] * (W).w[1][s1], (W).w[0][s0] * (W).dw[1][s1]};      \
-            sm_real dpos[2] = {(W).dp[0][s0], (W).dp[1][s1]};
+            sm_real gw[2] = {(W).dw[0][s0] * (W).w[1][s1], (W).w[0][s0] * (W).dw[1][s1]};
 #define STENCIL_END }
 #else
-#define STENCIL_BEGIN(S, W, g, c)                                                              \
+#define STENCIL_BEGIN(S, W, pb)                                                                \
     for (int s0 = 0; s0 < (S); s0++)                                                           \
         for (int s1 = 0; s1 < (S); s1++)                                                       \
             for (int s2 = 0; s2 < (S); s2++) {                                                 \
-                size_t ni = (W).off[0][s0] + (W).off[1][s1] + (W).off[2][s2];                  \
+                const int ss_[3] = {s0, s1, s2};                                               \
+                size_t ni = stencil_node((pb), &(W), ss_);                                     \
                 sm_real wyz = (W).w[1][s1] * (W).w[2][s2];                                     \
                 sm_real wgt = (W).w[0][s0] * wyz;                                              \
                 sm_real gw[3] = {(W).dw[0][s0] * wyz, (W).w[0][s0] * (W).dw[1][s1] * (W).w[2][s2], \
-                                 (W).w[0][s0] * (W).w[1][s1] * (W).dw[2][s2]};                 \
-                sm_real dpos[3] = {(W).dp[0][s0], (W).dp[1][s1], (W).dp[2][s2]};
+                                 (W).w[0][s0] * (W).w[1][s1] * (W).dw[2][s2]};
 #define STENCIL_END }
 #endif
+
+/* First node (per axis) of a particle block. */
+static inline void pblock_origin(const sm_pblock *pb, int bc[3]) {
+    sm_block_coords(pb->key, bc);
+    for (int a = 0; a < 3; a++) bc[a] = a < D ? bc[a] : 0;
+}
 
 /* ------------------------------------------------------------------------------------------ */
 /* Binning                                                                                      */
 
-static inline uint32_t particle_block(const sm_world *w, const sm_step_ctx *c, const sm_real *xp, int S) {
+static inline uint64_t particle_key(const sm_step_ctx *c, const sm_real *xp, int S) {
     int bb[3] = {0, 0, 0};
     for (int a = 0; a < D; a++) bb[a] = sm_kernel_base(S, (xp[a] - c->lo[a]) * c->inv_dx) >> SM_BLOCK_BITS;
-    return (uint32_t)sm_grid_block_id(&w->grid, bb[0], bb[1], bb[2]);
+    return sm_block_key(bb[0], bb[1], bb[2]);
 }
 
-/* Block coordinates of block id b, and its colour (block coordinates mod 2). */
-static inline int block_color(const sm_grid *g, size_t b, int *bi, int *bj, int *bk) {
-    *bk = (int)(b % (size_t)g->blocks[2]);
-    size_t r = b / (size_t)g->blocks[2];
-    *bj = (int)(r % (size_t)g->blocks[1]);
-    *bi = (int)(r / (size_t)g->blocks[1]);
-    return (*bi & 1) | ((*bj & 1) << 1) | ((D == 3 ? (*bk & 1) : 0) << 2);
+static inline int key_color(uint64_t key) {
+    int b[3];
+    sm_block_coords(key, b);
+    return (b[0] & 1) | ((b[1] & 1) << 1) | ((D == 3 ? (b[2] & 1) : 0) << 2);
 }
 
-static void SM_FN(sort)(sm_world *w, const sm_step_ctx *c) {
+static int cmp_u64(const void *a, const void *b) {
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Key-ordered (key, index) pairs are stored as two uint64 each. */
+static int cmp_pair(const void *a, const void *b) { return cmp_u64(a, b); }
+
+static sm_status grow(void **ptr, size_t *cap, size_t need, size_t elem) {
+    if (need <= *cap) return SM_OK;
+    size_t c = *cap ? *cap : 64;
+    while (c < need) c += c / 2;
+    void *q = sm_realloc(*ptr, c * elem);
+    if (!q) return SM_ERR_NOMEM;
+    *ptr = q;
+    *cap = c;
+    return SM_OK;
+}
+
+/* Moves particle storage into perm order (in place, following the permutation's cycles), so the
+ * particles of a block are contiguous in memory; perm becomes the identity. */
+static void reorder_particles(sm_world *w) {
+    sm_particles *P = &w->p;
+    const size_t n = P->n;
+    uint32_t *perm = w->perm;
+    const uint32_t MARK = 0x80000000u;
+    for (size_t i = 0; i < n; i++) {
+        if (perm[i] & MARK) continue;
+        if (perm[i] == i) {
+            perm[i] |= MARK;
+            continue;
+        }
+        /* Position j receives the particle at perm[j]; save position i's particle first. */
+        sm_real x[D], v[D], B[DD], F[DD], tau[DD], scal[4];
+        uint16_t mat = P->mat[i];
+        memcpy(x, P->x + i * D, sizeof x);
+        memcpy(v, P->v + i * D, sizeof v);
+        memcpy(B, P->B + i * DD, sizeof B);
+        memcpy(F, P->F + i * DD, sizeof F);
+        memcpy(tau, P->tau + i * DD, sizeof tau);
+        scal[0] = P->mass[i];
+        scal[1] = P->vol0[i];
+        scal[2] = P->q[i];
+        scal[3] = P->alpha[i];
+        size_t j = i;
+        for (;;) {
+            size_t src = perm[j];
+            perm[j] |= MARK;
+            if (src == i) break;
+            memcpy(P->x + j * D, P->x + src * D, sizeof x);
+            memcpy(P->v + j * D, P->v + src * D, sizeof v);
+            memcpy(P->B + j * DD, P->B + src * DD, sizeof B);
+            memcpy(P->F + j * DD, P->F + src * DD, sizeof F);
+            memcpy(P->tau + j * DD, P->tau + src * DD, sizeof tau);
+            P->mass[j] = P->mass[src];
+            P->vol0[j] = P->vol0[src];
+            P->q[j] = P->q[src];
+            P->alpha[j] = P->alpha[src];
+            P->mat[j] = P->mat[src];
+            j = src;
+        }
+        memcpy(P->x + j * D, x, sizeof x);
+        memcpy(P->v + j * D, v, sizeof v);
+        memcpy(P->B + j * DD, B, sizeof B);
+        memcpy(P->F + j * DD, F, sizeof F);
+        memcpy(P->tau + j * DD, tau, sizeof tau);
+        P->mass[j] = scal[0];
+        P->vol0[j] = scal[1];
+        P->q[j] = scal[2];
+        P->alpha[j] = scal[3];
+        P->mat[j] = mat;
+    }
+    for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
+    w->reorders++;
+}
+
+static sm_status SM_FN(sort)(sm_world *w, const sm_step_ctx *c) {
     sm_grid *g = &w->grid;
     const size_t n = w->p.n;
     const int S = stencil_size(w);
     const long nl = (long)n;
     const sm_real *x = w->p.x;
     uint32_t *keys = w->keys;
-#pragma omp parallel for schedule(static) num_threads(c->threads)
-    for (long p = 0; p < nl; p++) keys[p] = particle_block(w, c, x + (size_t)p * D, S);
+    const int T = c->threads > 0 ? c->threads : 1;
 
-    /* Stable counting sort by block id. */
-    uint32_t *start = w->block_start;
-    memset(start, 0, (g->nblocks + 1) * sizeof(uint32_t));
-    for (size_t p = 0; p < n; p++) start[keys[p] + 1]++;
-    for (size_t b = 0; b < g->nblocks; b++) start[b + 1] += start[b];
-    /* Fill using a running cursor per block; reuse color_blocks as scratch is not possible (size),
-     * so walk with a temporary copy held in the perm's tail: instead do two passes over blocks. */
-    for (size_t p = 0; p < n; p++) {
-        uint32_t k = keys[p];
-        w->perm[start[k]++] = (uint32_t)p;
+    /* 1. Each particle's block among the previous step's blocks (read-only hash lookups). */
+    sm_block_hash *ph = &w->pb_hash;
+    long misses = 0;
+#pragma omp parallel for schedule(static) reduction(+ : misses) num_threads(T)
+    for (long p = 0; p < nl; p++) {
+        uint32_t s = sm_block_hash_find(ph, particle_key(c, x + (size_t)p * D, S));
+        keys[p] = s;
+        misses += (s == SM_NO_SLOT);
     }
-    /* start[k] now points at the end of block k; shift back to block starts. */
-    for (size_t b = g->nblocks; b > 0; b--) start[b] = start[b - 1];
-    start[0] = 0;
-
-    /* Colour lists of non-empty particle blocks, and the active grid blocks around them. */
-    sm_grid_clear_active(g);
+    /* 2. New blocks, in particle order (serial, deterministic). */
+    size_t nb = w->npb;
+    if (misses > 0) {
+        size_t need = nb + (size_t)misses;
+        if (grow((void **)&w->pb, &w->pb_cap, need, sizeof *w->pb) != SM_OK) return SM_ERR_NOMEM;
+        if (ph->cap < 2 * need) {
+            if (sm_block_hash_reserve(ph, need) != SM_OK) return SM_ERR_NOMEM;
+            for (size_t b = 0; b < nb; b++) sm_block_hash_put(ph, w->pb[b].key, (uint32_t)b);
+        }
+        uint64_t last = UINT64_MAX;
+        uint32_t last_slot = SM_NO_SLOT;
+        for (size_t p = 0; p < n; p++) {
+            if (keys[p] != SM_NO_SLOT) continue;
+            uint64_t k = particle_key(c, x + p * D, S);
+            if (k != last) {
+                last = k;
+                last_slot = sm_block_hash_put(ph, k, (uint32_t)nb);
+                if (last_slot == nb) w->pb[nb++].key = k;
+            }
+            keys[p] = last_slot;
+        }
+    }
+    /* 3. Stable counting sort by block, blocks in ascending key order. Scratch: per-thread
+     * counts (T nb), then ranks (nb). */
+    if (grow((void **)&w->pb_scratch, &w->pb_scratch_cap, (size_t)(T + 1) * nb + 1, sizeof(uint32_t)) != SM_OK ||
+        grow((void **)&w->sort_keys, &w->sort_keys_cap, 2 * nb + 2, sizeof(uint64_t)) != SM_OK)
+        return SM_ERR_NOMEM;
+    uint32_t *cnt = w->pb_scratch, *rank = w->pb_scratch + (size_t)T * nb;
+    memset(cnt, 0, (size_t)T * nb * sizeof(uint32_t));
+#pragma omp parallel for schedule(static, 1) num_threads(T)
+    for (int t = 0; t < T; t++) {
+        size_t p0 = n * (size_t)t / (size_t)T, p1 = n * (size_t)(t + 1) / (size_t)T;
+        uint32_t *ct = cnt + (size_t)t * nb;
+        for (size_t p = p0; p < p1; p++) ct[keys[p]]++;
+    }
+    uint64_t *pairs = w->sort_keys;
+    size_t nne = 0;
+    for (size_t b = 0; b < nb; b++) {
+        uint32_t total = 0;
+        for (int t = 0; t < T; t++) total += cnt[(size_t)t * nb + b];
+        if (total) {
+            pairs[2 * nne] = w->pb[b].key;
+            pairs[2 * nne + 1] = b;
+            nne++;
+        }
+        rank[b] = SM_NO_SLOT;
+    }
+    qsort(pairs, nne, 2 * sizeof(uint64_t), cmp_pair);
+    /* Per-thread cursors: cnt becomes the first position of thread t's particles of block b. */
+    uint32_t pos = 0;
+    for (size_t r = 0; r < nne; r++) {
+        size_t b = (size_t)pairs[2 * r + 1];
+        rank[b] = (uint32_t)r;
+        for (int t = 0; t < T; t++) {
+            uint32_t k = cnt[(size_t)t * nb + b];
+            cnt[(size_t)t * nb + b] = pos;
+            pos += k;
+        }
+    }
+#pragma omp parallel for schedule(static, 1) num_threads(T)
+    for (int t = 0; t < T; t++) {
+        size_t p0 = n * (size_t)t / (size_t)T, p1 = n * (size_t)(t + 1) / (size_t)T;
+        uint32_t *ct = cnt + (size_t)t * nb;
+        for (size_t p = p0; p < p1; p++) w->perm[ct[keys[p]]++] = (uint32_t)p;
+    }
+    /* The new block list (ascending key) and its hash. cnt[T-1 row] now holds block ends. */
+    {
+        uint32_t start = 0;
+        for (size_t r = 0; r < nne; r++) {
+            size_t b = (size_t)pairs[2 * r + 1];
+            uint32_t end = cnt[(size_t)(T - 1) * nb + b];
+            pairs[2 * r + 1] = ((uint64_t)start << 32) | end;
+            start = end;
+        }
+        for (size_t r = 0; r < nne; r++) {
+            w->pb[r].key = pairs[2 * r];
+            w->pb[r].start = (uint32_t)(pairs[2 * r + 1] >> 32);
+            w->pb[r].end = (uint32_t)pairs[2 * r + 1];
+        }
+        w->npb = nne;
+        sm_block_hash_clear(ph);
+        for (size_t r = 0; r < nne; r++) sm_block_hash_put(ph, w->pb[r].key, (uint32_t)r);
+    }
+    /* 4. Live grid blocks: the 2^d neighbours (+0/+1 per axis) of every particle block, in
+     * ascending key order. */
+    sm_block_hash *gh = &g->hash;
+    if (sm_block_hash_reserve(gh, nne * NGB) != SM_OK) return SM_ERR_NOMEM;
+    sm_block_hash_clear(gh);
+    size_t ng = 0;
+    for (size_t r = 0; r < nne; r++) {
+        int bc[3];
+        sm_block_coords(w->pb[r].key, bc);
+        for (int cb = 0; cb < NGB; cb++) {
+            int o[3] = {0, 0, 0};
+            for (int a = 0; a < D; a++) o[a] = bc[a] + ((cb >> (D - 1 - a)) & 1);
+            if (o[0] >= g->blocks[0] || o[1] >= g->blocks[1] || o[2] >= g->blocks[2]) continue;
+            sm_block_hash_put(gh, sm_block_key(o[0], o[1], o[2]), 0);
+        }
+    }
+    for (size_t i = 0; i < gh->cap; i++) ng += gh->key[i] != UINT64_MAX;
+    if (sm_grid_reserve(g, ng) != SM_OK) return SM_ERR_NOMEM;
+    {
+        size_t k = 0;
+        for (size_t i = 0; i < gh->cap; i++)
+            if (gh->key[i] != UINT64_MAX) g->key[k++] = gh->key[i];
+        qsort(g->key, ng, sizeof(uint64_t), cmp_u64);
+        sm_block_hash_clear(gh);
+        for (size_t s = 0; s < ng; s++) sm_block_hash_put(gh, g->key[s], (uint32_t)s);
+        g->nactive = ng;
+    }
+    for (size_t r = 0; r < nne; r++) {
+        int bc[3];
+        sm_block_coords(w->pb[r].key, bc);
+        for (int cb = 0; cb < NGB; cb++) {
+            int o[3] = {0, 0, 0};
+            for (int a = 0; a < D; a++) o[a] = bc[a] + ((cb >> (D - 1 - a)) & 1);
+            w->pb[r].gslot[cb] = sm_block_hash_find(gh, sm_block_key(o[0], o[1], o[2]));
+        }
+        for (int cb = NGB; cb < 8; cb++) w->pb[r].gslot[cb] = SM_NO_SLOT;
+    }
+    sm_grid_zero(g, T);
+    /* 5. Colour lists. */
+    if (grow((void **)&w->color_blocks, &w->color_cap, nne, sizeof(uint32_t)) != SM_OK) return SM_ERR_NOMEM;
     memset(w->color_count, 0, sizeof w->color_count);
-    for (size_t b = 0; b < g->nblocks; b++) {
-        if (start[b + 1] == start[b]) continue;
-        int bi, bj, bk;
-        w->color_count[block_color(g, b, &bi, &bj, &bk)]++;
-        for (int di = 0; di < 2; di++)
-            for (int dj = 0; dj < 2; dj++)
-                for (int dk = 0; dk < (D == 3 ? 2 : 1); dk++) {
-                    int ii = bi + di, jj = bj + dj, kk = bk + dk;
-                    if (ii < g->blocks[0] && jj < g->blocks[1] && kk < g->blocks[2])
-                        g->active[sm_grid_block_id(g, ii, jj, kk)] = 1;
-                }
-    }
+    for (size_t r = 0; r < nne; r++) w->color_count[key_color(w->pb[r].key)]++;
     w->color_offset[0] = 0;
     for (int col = 0; col < 8; col++) w->color_offset[col + 1] = w->color_offset[col] + w->color_count[col];
     uint32_t cursor[8];
     for (int col = 0; col < 8; col++) cursor[col] = w->color_offset[col];
-    for (size_t b = 0; b < g->nblocks; b++) {
-        if (start[b + 1] == start[b]) continue;
-        int bi, bj, bk;
-        w->color_blocks[cursor[block_color(g, b, &bi, &bj, &bk)]++] = (uint32_t)b;
+    for (size_t r = 0; r < nne; r++) w->color_blocks[cursor[key_color(w->pb[r].key)]++] = (uint32_t)r;
+    /* 6. Per-thread transfer caches. */
+    size_t cache_need = (size_t)T * NCACHE * SM_LANES;
+    if (w->cache_cap < cache_need) {
+        free(w->cache);
+        w->cache = sm_aligned_alloc(64, cache_need * sizeof(sm_real));
+        if (!w->cache) {
+            w->cache_cap = 0;
+            return SM_ERR_NOMEM;
+        }
+        w->cache_cap = cache_need;
     }
-    sm_grid_prepare_active(g, c->threads);
+    /* 7. Reorder the storage when the particles of a block are no longer mostly contiguous
+     * (fewer than 16 in a row on average): contiguous runs make every later pass stream. */
+    size_t breaks = 0;
+    for (size_t i = 1; i < n; i++) breaks += w->perm[i] != w->perm[i - 1] + 1;
+    if (breaks * 16 > n) reorder_particles(w);
+    return SM_OK;
 }
 
 /* ------------------------------------------------------------------------------------------ */
 /* P2G                                                                                          */
 
 static inline __attribute__((always_inline)) void p2g_block(sm_world *w, const sm_step_ctx *c, int S,
-                                                           int with_force, uint32_t b) {
+                                                           int with_force, uint32_t b, vec *restrict cache) {
     sm_grid *g = &w->grid;
     const sm_particles *P = &w->p;
+    const sm_pblock *pb = &w->pb[b];
     const int apic = (w->def.transfer == SM_TRANSFER_APIC);
     const sm_real dinv = (S == 3 ? SM_R(4.0) : SM_R(3.0)) * c->inv_dx * c->inv_dx;
-    for (uint32_t idx = w->block_start[b]; idx < w->block_start[b + 1]; idx++) {
+    int bc[3];
+    pblock_origin(pb, bc);
+    memset(cache, 0, NCACHE * sizeof(vec));
+    for (uint32_t idx = pb->start; idx < pb->end; idx++) {
         const size_t p = w->perm[idx];
         weights W;
-        kernel_weights(S, P->x + p * D, c, g, &W);
+        kernel_weights(S, P->x + p * D, c, bc, &W);
         const sm_real mp = P->mass[p];
-        sm_real mv[D], mC[DD], Vt[DD];
-        for (int a = 0; a < D; a++) mv[a] = mp * P->v[p * D + a];
+        const sm_real *vp = P->v + p * D;
+        sm_real mC[DD], Vt[DD];
+        const sm_real vf = with_force ? -P->vol0[p] : 0;
         for (int k = 0; k < DD; k++) {
             mC[k] = apic ? mp * P->B[p * DD + k] * dinv : 0;
-            Vt[k] = with_force ? -P->vol0[p] * P->tau[p * DD + k] : 0;
+            Vt[k] = vf * P->tau[p * DD + k];
         }
-        STENCIL_BEGIN(S, W, g, c)
-        g->m[ni] += wgt * mp;
-        for (int a = 0; a < D; a++) {
-            sm_real aff = 0, fa = 0;
-            for (int e = 0; e < D; e++) {
-                aff += mC[a * D + e] * dpos[e];
-                fa += Vt[a * D + e] * gw[e];
+        vec A = {0}, Ce[D], Ve[D];
+        A[0] = mp;
+        for (int a = 0; a < D; a++) A[1 + a] = mp * vp[a];
+        for (int e = 0; e < D; e++) {
+            Ce[e] = (vec){0};
+            Ve[e] = (vec){0};
+            for (int a = 0; a < D; a++) {
+                Ce[e][1 + a] = mC[a * D + e];
+                Ve[e][1 + D + a] = Vt[a * D + e];
             }
-            g->v[ni * D + a] += wgt * (mv[a] + aff);
-            g->f[ni * D + a] += fa;
         }
-        STENCIL_END
+        /* Per-axis parts: axis 0 carries A; axes 1.. carry only their C and V terms. */
+        vec Px[4], Ry[4];
+        for (int s = 0; s < S; s++) {
+            Px[s] = W.w[0][s] * A + (W.w[0][s] * W.dp[0][s]) * Ce[0] + W.dw[0][s] * Ve[0];
+            Ry[s] = (W.w[1][s] * W.dp[1][s]) * Ce[1] + W.dw[1][s] * Ve[1];
+        }
+#if D == 2
+        for (int s0 = 0; s0 < S; s0++) {
+            vec *row = cache + (W.lb[0] + s0) * SM_CACHE_SIDE + W.lb[1];
+            for (int s1 = 0; s1 < S; s1++) row[s1] += W.w[1][s1] * Px[s0] + W.w[0][s0] * Ry[s1];
+        }
+#else
+        vec Rz[4], Y[4][4];
+        sm_real W12[4][4];
+        for (int s = 0; s < S; s++) Rz[s] = (W.w[2][s] * W.dp[2][s]) * Ce[2] + W.dw[2][s] * Ve[2];
+        for (int s1 = 0; s1 < S; s1++)
+            for (int s2 = 0; s2 < S; s2++) {
+                W12[s1][s2] = W.w[1][s1] * W.w[2][s2];
+                Y[s1][s2] = W.w[2][s2] * Ry[s1] + W.w[1][s1] * Rz[s2];
+            }
+        for (int s0 = 0; s0 < S; s0++) {
+            const sm_real w0 = W.w[0][s0];
+            for (int s1 = 0; s1 < S; s1++) {
+                vec *row = cache + ((W.lb[0] + s0) * SM_CACHE_SIDE + W.lb[1] + s1) * SM_CACHE_SIDE + W.lb[2];
+                for (int s2 = 0; s2 < S; s2++) row[s2] += W12[s1][s2] * Px[s0] + w0 * Y[s1][s2];
+            }
+        }
+#endif
+    }
+    /* Add the cache into the 2^d grid blocks. */
+    for (int cb = 0; cb < NGB; cb++) {
+        const uint32_t slot = pb->gslot[cb];
+        if (slot == SM_NO_SLOT) continue;
+        const int ci = (cb >> (D - 1)) & 1, cj = (cb >> (D - 2)) & 1;
+#if D == 3
+        const int ck = cb & 1;
+#endif
+        for (int l = 0; l < BN; l++) {
+#if D == 2
+            const int li = l >> 2, lj = l & 3;
+            const vec q = cache[(4 * ci + li) * SM_CACHE_SIDE + 4 * cj + lj];
+#else
+            const int li = l >> 4, lj = (l >> 2) & 3, lk = l & 3;
+            const vec q = cache[((4 * ci + li) * SM_CACHE_SIDE + 4 * cj + lj) * SM_CACHE_SIDE + 4 * ck + lk];
+#endif
+            const size_t ni = (size_t)slot * BN + (size_t)l;
+            g->m[ni] += q[0];
+            for (int a = 0; a < D; a++) {
+                g->v[ni * D + a] += q[1 + a];
+                g->f[ni * D + a] += q[1 + D + a];
+            }
+        }
     }
 }
 
 static void SM_FN(p2g)(sm_world *w, const sm_step_ctx *c, int with_force) {
     const int S = stencil_size(w);
+    vec *caches = (vec *)w->cache;
     for (int col = 0; col < NCOLORS; col++) {
         const long first = (long)w->color_offset[col], last = (long)w->color_offset[col + 1];
-        if (S == 3) {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(c->threads)
-            for (long t = first; t < last; t++) p2g_block(w, c, 3, with_force, w->color_blocks[t]);
-        } else {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(c->threads)
-            for (long t = first; t < last; t++) p2g_block(w, c, 4, with_force, w->color_blocks[t]);
+#pragma omp parallel num_threads(c->threads)
+        {
+#ifdef _OPENMP
+            vec *cache = caches + (size_t)omp_get_thread_num() * NCACHE;
+#else
+            vec *cache = caches;
+#endif
+            if (S == 3) {
+#pragma omp for schedule(dynamic, 1)
+                for (long t = first; t < last; t++) p2g_block(w, c, 3, with_force, w->color_blocks[t], cache);
+            } else {
+#pragma omp for schedule(dynamic, 1)
+                for (long t = first; t < last; t++) p2g_block(w, c, 4, with_force, w->color_blocks[t], cache);
+            }
         }
     }
 }
@@ -232,7 +508,7 @@ static void SM_FN(grid_update)(sm_world *w, const sm_step_ctx *c) {
     const int static_sticks = w->def.static_friction_sticks;
 #pragma omp parallel for schedule(static) num_threads(c->threads)
     for (long t = 0; t < nb; t++) {
-        size_t b = g->active_list[t];
+        size_t b = (size_t)t;
         for (size_t ni = b * bn; ni < (b + 1) * bn; ni++) {
             sm_real m = g->m[ni];
             if (!(m > 0)) {
@@ -267,61 +543,132 @@ static void SM_FN(grid_update)(sm_world *w, const sm_step_ctx *c) {
 
 static long SM_FN(grid_check)(const sm_world *w) {
     const sm_grid *g = &w->grid;
-    const size_t bn = (size_t)g->block_nodes;
-    for (size_t t = 0; t < g->nactive; t++) {
-        size_t b = g->active_list[t];
-        for (size_t ni = b * bn; ni < (b + 1) * bn; ni++)
-            for (int a = 0; a < D; a++)
-                if (!isfinite(g->vt[ni * D + a]) || !isfinite(g->f[ni * D + a])) return (long)ni;
-    }
+    const size_t nn = g->nactive * (size_t)g->block_nodes;
+    for (size_t ni = 0; ni < nn; ni++)
+        for (int a = 0; a < D; a++)
+            if (!isfinite(g->vt[ni * D + a]) || !isfinite(g->f[ni * D + a])) return (long)ni;
     return -1;
 }
 
 /* ------------------------------------------------------------------------------------------ */
 /* G2P                                                                                          */
 
-static inline __attribute__((always_inline)) size_t g2p_one(sm_world *w, const sm_step_ctx *c, int S,
-                                                           size_t p) {
+/* Gathers the 2^d grid blocks of particle block pb into the cache: lanes 0..d-1 hold v-tilde
+ * (FLIP: v-tilde - r v^n, so that r v_p + sum w (v-tilde - r v^n) is the FLIP blend (3.111)),
+ * lanes d..2d-1 hold v-bar. */
+static void SM_FN(g2p_gather)(const sm_world *w, const sm_pblock *pb, vec *restrict cache) {
     const sm_grid *g = &w->grid;
+    const int flip = (w->def.transfer == SM_TRANSFER_FLIP);
+    const sm_real r = (sm_real)w->def.flip_ratio;
+    for (int cb = 0; cb < NGB; cb++) {
+        const uint32_t slot = pb->gslot[cb];
+        const int ci = (cb >> (D - 1)) & 1, cj = (cb >> (D - 2)) & 1;
+#if D == 3
+        const int ck = cb & 1;
+#endif
+        for (int l = 0; l < BN; l++) {
+#if D == 2
+            const int li = l >> 2, lj = l & 3;
+            vec *q = &cache[(4 * ci + li) * SM_CACHE_SIDE + 4 * cj + lj];
+#else
+            const int li = l >> 4, lj = (l >> 2) & 3, lk = l & 3;
+            vec *q = &cache[((4 * ci + li) * SM_CACHE_SIDE + 4 * cj + lj) * SM_CACHE_SIDE + 4 * ck + lk];
+#endif
+            vec val = {0};
+            if (slot != SM_NO_SLOT) {
+                const size_t ni = (size_t)slot * BN + (size_t)l;
+                for (int a = 0; a < D; a++) {
+                    val[a] = flip ? g->vt[ni * D + a] - r * g->v[ni * D + a] : g->vt[ni * D + a];
+                    val[D + a] = g->f[ni * D + a];
+                }
+            }
+            *q = val;
+        }
+    }
+}
+
+static inline __attribute__((always_inline)) size_t g2p_one(sm_world *w, const sm_step_ctx *c, int S, size_t p,
+                                                           const int bc[3], const vec *restrict cache) {
     sm_particles *P = &w->p;
     const int transfer = w->def.transfer;
     const sm_real dt = (sm_real)c->dt;
     weights W;
-    kernel_weights(S, P->x + p * D, c, g, &W);
-    sm_real vpic[D] = {0}, vflip[D] = {0}, vbar[D] = {0}, Bn[DD] = {0}, T[DD] = {0};
-    STENCIL_BEGIN(S, W, g, c)
-    for (int a = 0; a < D; a++) {
-        sm_real vt = g->vt[ni * D + a], vb = g->f[ni * D + a];
-        vpic[a] += wgt * vt;
-        vbar[a] += wgt * vb;
-        if (transfer == SM_TRANSFER_FLIP) vflip[a] += wgt * (vt - g->v[ni * D + a]);
-        for (int e = 0; e < D; e++) {
-            Bn[a * D + e] += wgt * vt * dpos[e];
-            T[a * D + e] += vb * gw[e];
+    kernel_weights(S, P->x + p * D, c, bc, &W);
+    /* K_e[s] = (w dp, ..., dw, ...): lanes 0..d-1 weight v-tilde by w dp (B), lanes d..2d-1 weight
+     * v-bar by dw (velocity gradient). */
+    vec K[D][4];
+    for (int e = 0; e < D; e++)
+        for (int s = 0; s < S; s++) {
+            vec k = {0};
+            for (int a = 0; a < D; a++) {
+                k[a] = W.w[e][s] * W.dp[e][s];
+                k[D + a] = W.dw[e][s];
+            }
+            K[e][s] = k;
         }
+    vec Sum = {0}, E[D];
+    for (int e = 0; e < D; e++) E[e] = (vec){0};
+#if D == 2
+    for (int s0 = 0; s0 < S; s0++) {
+        const vec *row = cache + (W.lb[0] + s0) * SM_CACHE_SIDE + W.lb[1];
+        vec t = {0}, ty = {0};
+        for (int s1 = 0; s1 < S; s1++) {
+            const vec N = row[s1];
+            t += W.w[1][s1] * N;
+            ty += K[1][s1] * N;
+        }
+        Sum += W.w[0][s0] * t;
+        E[0] += K[0][s0] * t;
+        E[1] += W.w[0][s0] * ty;
     }
-    STENCIL_END
+#else
+    vec KY[4][4], KZ[4][4];
+    sm_real W12[4][4];
+    for (int s1 = 0; s1 < S; s1++)
+        for (int s2 = 0; s2 < S; s2++) {
+            W12[s1][s2] = W.w[1][s1] * W.w[2][s2];
+            KY[s1][s2] = W.w[2][s2] * K[1][s1];
+            KZ[s1][s2] = W.w[1][s1] * K[2][s2];
+        }
+    for (int s0 = 0; s0 < S; s0++) {
+        vec t = {0}, ty = {0}, tz = {0};
+        for (int s1 = 0; s1 < S; s1++) {
+            const vec *row = cache + ((W.lb[0] + s0) * SM_CACHE_SIDE + W.lb[1] + s1) * SM_CACHE_SIDE + W.lb[2];
+            for (int s2 = 0; s2 < S; s2++) {
+                const vec N = row[s2];
+                t += W12[s1][s2] * N;
+                ty += KY[s1][s2] * N;
+                tz += KZ[s1][s2] * N;
+            }
+        }
+        Sum += W.w[0][s0] * t;
+        E[0] += K[0][s0] * t;
+        E[1] += W.w[0][s0] * ty;
+        E[2] += W.w[0][s0] * tz;
+    }
+#endif
     if (transfer == SM_TRANSFER_FLIP) {
         sm_real r = (sm_real)w->def.flip_ratio;
-        for (int a = 0; a < D; a++) P->v[p * D + a] = r * (P->v[p * D + a] + vflip[a]) + (1 - r) * vpic[a];
+        for (int a = 0; a < D; a++) P->v[p * D + a] = r * P->v[p * D + a] + Sum[a];
     } else {
-        for (int a = 0; a < D; a++) P->v[p * D + a] = vpic[a];
+        for (int a = 0; a < D; a++) P->v[p * D + a] = Sum[a];
     }
     if (transfer == SM_TRANSFER_APIC)
-        for (int k = 0; k < DD; k++) P->B[p * DD + k] = Bn[k];
-    /* F^E-hat = (I + dt T) F^E (3.114). */
+        for (int a = 0; a < D; a++)
+            for (int e = 0; e < D; e++) P->B[p * DD + a * D + e] = E[e][a];
+    /* F^E-hat = (I + dt T) F^E (3.114), T = sum v-bar grad w^T. */
     sm_real Fo[DD], *F = P->F + p * DD;
     memcpy(Fo, F, sizeof Fo);
     for (int a = 0; a < D; a++)
         for (int e = 0; e < D; e++) {
             sm_real s = Fo[a * D + e];
-            for (int k = 0; k < D; k++) s += dt * T[a * D + k] * Fo[k * D + e];
+            for (int k = 0; k < D; k++) s += dt * E[k][D + a] * Fo[k * D + e];
             F[a * D + e] = s;
         }
     /* x = x + dt sum w v-bar (3.116); the safety clamp keeps every stencil inside the grid. */
     size_t clamped = 0;
     for (int a = 0; a < D; a++) {
-        sm_real xa = P->x[p * D + a] + dt * vbar[a];
+        sm_real xa = P->x[p * D + a] + dt * Sum[D + a];
         sm_real lo = c->lo[a] + SM_R(2.0) * c->dx;
         sm_real hi = c->lo[a] + (sm_real)(w->cells[a] - 2) * c->dx;
         if (xa < lo) {
@@ -352,28 +699,33 @@ static inline __attribute__((always_inline)) size_t g2p_one(sm_world *w, const s
 
 static void SM_FN(g2p)(sm_world *w, const sm_step_ctx *c) {
     const int S = stencil_size(w);
-    const long n = (long)w->p.n;
+    const long nb = (long)w->npb;
+    vec *caches = (vec *)w->cache;
     unsigned long long clamped = 0, projected = 0;
-    if (S == 3) {
-#pragma omp parallel for schedule(static) reduction(+ : clamped, projected) num_threads(c->threads)
-        for (long i = 0; i < n; i++) {
-            size_t r = g2p_one(w, c, 3, w->perm[i]);
-            clamped += r & 1;
-            projected += r >> 1;
-        }
-    } else {
-#pragma omp parallel for schedule(static) reduction(+ : clamped, projected) num_threads(c->threads)
-        for (long i = 0; i < n; i++) {
-            size_t r = g2p_one(w, c, 4, w->perm[i]);
-            clamped += r & 1;
-            projected += r >> 1;
+#pragma omp parallel num_threads(c->threads) reduction(+ : clamped, projected)
+    {
+#ifdef _OPENMP
+        vec *cache = caches + (size_t)omp_get_thread_num() * NCACHE;
+#else
+        vec *cache = caches;
+#endif
+#pragma omp for schedule(dynamic, 1)
+        for (long b = 0; b < nb; b++) {
+            const sm_pblock *pb = &w->pb[b];
+            int bc[3];
+            pblock_origin(pb, bc);
+            SM_FN(g2p_gather)(w, pb, cache);
+            for (uint32_t idx = pb->start; idx < pb->end; idx++) {
+                size_t r = S == 3 ? g2p_one(w, c, 3, w->perm[idx], bc, cache) : g2p_one(w, c, 4, w->perm[idx], bc, cache);
+                clamped += r & 1;
+                projected += r >> 1;
+            }
         }
     }
     w->clamped += clamped;
     w->projected += projected;
 }
 
-/* ------------------------------------------------------------------------------------------ */
 /* Plasticity, hardening, stress                                                                */
 
 static inline void svd_d(const sm_real *F, sm_real *U, sm_real *s, sm_real *V) {
@@ -444,7 +796,7 @@ static void SM_FN(grid_totals)(const sm_world *w, int which, double *mass, doubl
     *mass = 0;
     for (int a = 0; a < 3; a++) mom[a] = ang[a] = 0;
     for (size_t t = 0; t < g->nactive; t++) {
-        size_t b = g->active_list[t];
+        size_t b = t;
         for (size_t ni = b * bn; ni < (b + 1) * bn; ni++) {
             double m = (double)g->m[ni];
             if (!(m > 0)) continue;
@@ -488,29 +840,23 @@ static void SM_FN(grid_totals)(const sm_world *w, int which, double *mass, doubl
 static sm_status SM_FN(imp_reserve)(sm_world *w, size_t nodes, size_t np, int K) {
     sm_implicit_ws *ws = &w->imp;
     sm_grid *g = &w->grid;
-    if (ws->bmap_cap < g->nblocks) {
-        int32_t *b = realloc(ws->bmap, g->nblocks * sizeof *b);
-        double *pa = realloc(ws->partial, g->nblocks * sizeof *pa);
-        if (!b || !pa) {
-            if (b) ws->bmap = b;
-            if (pa) ws->partial = pa;
-            return SM_ERR_NOMEM;
-        }
-        ws->bmap = b;
+    if (ws->partial_cap < g->nactive) {
+        double *pa = sm_realloc(ws->partial, g->nactive * sizeof *pa);
+        if (!pa) return SM_ERR_NOMEM;
         ws->partial = pa;
-        ws->bmap_cap = g->nblocks;
+        ws->partial_cap = g->nactive;
     }
     if (ws->ncap < nodes || ws->kcap < K + 1) {
         size_t cap = nodes + nodes / 4 + 64;
         int kc = K + 1;
         sm_real **vecs[7] = {&ws->mass, &ws->vn, &ws->z, &ws->y, &ws->dz, &ws->tmp, &ws->force};
         for (int k = 0; k < 7; k++) {
-            sm_real *q = realloc(*vecs[k], cap * (k == 0 ? 1 : D) * sizeof(sm_real));
+            sm_real *q = sm_realloc(*vecs[k], cap * (k == 0 ? 1 : D) * sizeof(sm_real));
             if (!q) return SM_ERR_NOMEM;
             *vecs[k] = q;
         }
-        sm_real *kr = realloc(ws->krylov, (size_t)kc * cap * D * sizeof(sm_real));
-        sm_node_contact *rc = realloc(ws->rec, cap * sizeof *rc);
+        sm_real *kr = sm_realloc(ws->krylov, (size_t)kc * cap * D * sizeof(sm_real));
+        sm_node_contact *rc = sm_realloc(ws->rec, cap * sizeof *rc);
         if (kr) ws->krylov = kr;
         if (rc) ws->rec = rc;
         if (!kr || !rc) return SM_ERR_NOMEM;
@@ -519,19 +865,14 @@ static sm_status SM_FN(imp_reserve)(sm_world *w, size_t nodes, size_t np, int K)
     }
     if (ws->pcap < np) {
         size_t cap = np + np / 4 + 64;
-        sm_implicit_particle *pp = realloc(ws->pp, cap * sizeof *pp);
-        sm_real *G = realloc(ws->G, cap * DD * sizeof(sm_real));
+        sm_implicit_particle *pp = sm_realloc(ws->pp, cap * sizeof *pp);
+        sm_real *G = sm_realloc(ws->G, cap * DD * sizeof(sm_real));
         if (pp) ws->pp = pp;
         if (G) ws->G = G;
         if (!pp || !G) return SM_ERR_NOMEM;
         ws->pcap = cap;
     }
     return SM_OK;
-}
-
-/* Compact index of a global node (the node must be in an active block). */
-static inline size_t SM_FN(imp_cidx)(const sm_implicit_ws *ws, size_t ni) {
-    return (size_t)ws->bmap[ni / IMP_BN] * IMP_BN + (ni & (IMP_BN - 1));
 }
 
 /* Mass-weighted dot product over the compact nodes, deterministic. */
@@ -553,45 +894,44 @@ static double SM_FN(imp_dot)(const sm_world *w, const sm_real *a, const sm_real 
     return s;
 }
 
-/* Particles' T = sum_i z_i grad w^T from a compact vector. */
+/* Particles' T = sum_i z_i grad w^T from a grid vector (particle p of block pb). */
 static inline __attribute__((always_inline)) void SM_FN(imp_gather_T)(const sm_world *w, const sm_step_ctx *c, int S,
-                                                                      size_t p, const sm_real *z, sm_real *T) {
-    const sm_implicit_ws *ws = &w->imp;
+                                                                      size_t p, const sm_pblock *pb, const sm_real *z,
+                                                                      sm_real *T) {
     weights W;
-    kernel_weights(S, w->p.x + p * D, c, &w->grid, &W);
+    int bc[3];
+    pblock_origin(pb, bc);
+    kernel_weights(S, w->p.x + p * D, c, bc, &W);
     for (int k = 0; k < DD; k++) T[k] = 0;
-    STENCIL_BEGIN(S, W, g, c)
+    STENCIL_BEGIN(S, W, pb)
     (void)wgt;
-    (void)dpos;
-    size_t ci = SM_FN(imp_cidx)(ws, ni);
     for (int a = 0; a < D; a++)
-        for (int e = 0; e < D; e++) T[a * D + e] += z[ci * D + a] * gw[e];
+        for (int e = 0; e < D; e++) T[a * D + e] += z[ni * D + a] * gw[e];
     STENCIL_END
 }
 
 /* out_i = sum_p M_p grad w_ip, with M_p from `mats` (n x DD), scattered in the colour schedule. */
 static void SM_FN(imp_scatter)(sm_world *w, const sm_step_ctx *c, const sm_real *mats, sm_real *out, size_t nodes) {
     const int S = stencil_size(w);
-    const sm_implicit_ws *ws = &w->imp;
     memset(out, 0, nodes * D * sizeof(sm_real));
     for (int col = 0; col < NCOLORS; col++) {
         const long first = (long)w->color_offset[col], last = (long)w->color_offset[col + 1];
 #pragma omp parallel for schedule(dynamic, 1) num_threads(c->threads)
         for (long t = first; t < last; t++) {
-            uint32_t b = w->color_blocks[t];
-            for (uint32_t idx = w->block_start[b]; idx < w->block_start[b + 1]; idx++) {
+            const sm_pblock *pb = &w->pb[w->color_blocks[t]];
+            int bc[3];
+            pblock_origin(pb, bc);
+            for (uint32_t idx = pb->start; idx < pb->end; idx++) {
                 const size_t p = w->perm[idx];
                 weights W;
-                kernel_weights(S, w->p.x + p * D, c, &w->grid, &W);
+                kernel_weights(S, w->p.x + p * D, c, bc, &W);
                 const sm_real *M = mats + p * DD;
-                STENCIL_BEGIN(S, W, g, c)
+                STENCIL_BEGIN(S, W, pb)
                 (void)wgt;
-                (void)dpos;
-                size_t ci = SM_FN(imp_cidx)(ws, ni);
                 for (int a = 0; a < D; a++) {
                     sm_real acc = 0;
                     for (int e = 0; e < D; e++) acc += M[a * D + e] * gw[e];
-                    out[ci * D + a] += acc;
+                    out[ni * D + a] += acc;
                 }
                 STENCIL_END
             }
@@ -614,14 +954,15 @@ static inline sm_implicit_material SM_FN(imp_material)(const sm_world *w, size_t
 static void SM_FN(imp_forces)(sm_world *w, const sm_step_ctx *c, const sm_real *z, int pre, size_t nodes) {
     sm_implicit_ws *ws = &w->imp;
     const int S = stencil_size(w);
-    const long n = (long)w->p.n;
+    const long nb = (long)w->npb;
     const sm_real dt = (sm_real)c->dt;
-#pragma omp parallel for schedule(static) num_threads(c->threads)
-    for (long i = 0; i < n; i++) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(c->threads)
+    for (long b = 0; b < nb; b++)
+    for (uint32_t i = w->pb[b].start; i < w->pb[b].end; i++) {
         size_t p = w->perm[i];
         sm_real T[DD];
-        if (S == 3) SM_FN(imp_gather_T)(w, c, 3, p, z, T);
-        else SM_FN(imp_gather_T)(w, c, 4, p, z, T);
+        if (S == 3) SM_FN(imp_gather_T)(w, c, 3, p, &w->pb[b], z, T);
+        else SM_FN(imp_gather_T)(w, c, 4, p, &w->pb[b], z, T);
         sm_implicit_material im = SM_FN(imp_material)(w, p);
         if (pre) sm_implicit_precompute(D, w->p.F + p * DD, dt, T, w->p.vol0[p], &im, &ws->pp[p], ws->G + p * DD);
         else sm_implicit_force_matrix(D, w->p.F + p * DD, dt, T, w->p.vol0[p], &im, ws->G + p * DD);
@@ -631,9 +972,8 @@ static void SM_FN(imp_forces)(sm_world *w, const sm_step_ctx *c, const sm_real *
 
 /* Node position of compact node l. */
 static inline void SM_FN(imp_node_x)(const sm_world *w, const sm_step_ctx *c, size_t l, double xi[3]) {
-    size_t ni = (size_t)w->grid.active_list[l / IMP_BN] * IMP_BN + (l & (IMP_BN - 1));
     int ijk[3];
-    sm_grid_node_coords(&w->grid, ni, ijk);
+    sm_grid_node_coords(&w->grid, l, ijk);
     xi[0] = xi[1] = xi[2] = 0;
     for (int a = 0; a < D; a++) xi[a] = (double)c->lo[a] + (double)ijk[a] * (double)c->dx;
 }
@@ -722,16 +1062,17 @@ static double SM_FN(imp_residual_norm2)(sm_world *w, const sm_step_ctx *c, const
 static void SM_FN(imp_times_diff)(sm_world *w, const sm_step_ctx *c, const sm_real *x, sm_real *out, size_t nodes) {
     sm_implicit_ws *ws = &w->imp;
     const int S = stencil_size(w);
-    const long n = (long)w->p.n;
+    const long nb = (long)w->npb;
     sm_real *xp = ws->tmp;
     memcpy(xp, x, nodes * D * sizeof(sm_real));
     SM_FN(imp_project)(w, c, xp, nodes, 0);
-#pragma omp parallel for schedule(static) num_threads(c->threads)
-    for (long i = 0; i < n; i++) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(c->threads)
+    for (long b = 0; b < nb; b++)
+    for (uint32_t i = w->pb[b].start; i < w->pb[b].end; i++) {
         size_t p = w->perm[i];
         sm_real T1[DD];
-        if (S == 3) SM_FN(imp_gather_T)(w, c, 3, p, xp, T1);
-        else SM_FN(imp_gather_T)(w, c, 4, p, xp, T1);
+        if (S == 3) SM_FN(imp_gather_T)(w, c, 3, p, &w->pb[b], xp, T1);
+        else SM_FN(imp_gather_T)(w, c, 4, p, &w->pb[b], xp, T1);
         sm_implicit_apply(D, &ws->pp[p], T1, ws->G + p * DD);
     }
     SM_FN(imp_scatter)(w, c, ws->G, out, nodes);
@@ -808,12 +1149,10 @@ static sm_status SM_FN(implicit_grid)(sm_world *w, const sm_step_ctx *c) {
     const int K = w->def.gmres_max_iterations;
     if (SM_FN(imp_reserve)(w, nodes, w->p.n, K) != SM_OK)
         return sm_world_fail(w, SM_ERR_NOMEM, "implicit integrator: out of memory for %zu grid nodes", nodes);
-    for (size_t b = 0; b < g->nblocks; b++) ws->bmap[b] = -1;
-    for (size_t t = 0; t < g->nactive; t++) ws->bmap[g->active_list[t]] = (int32_t)t;
     /* Compact mass and v^n (P2G left momentum in g->v). */
     double msum = 0;
     for (size_t l = 0; l < nodes; l++) {
-        size_t ni = (size_t)g->active_list[l / IMP_BN] * IMP_BN + (l & (IMP_BN - 1));
+        size_t ni = l;
         sm_real m = g->m[ni];
         ws->mass[l] = m > 0 ? m : 0;
         msum += (double)ws->mass[l];
@@ -881,7 +1220,7 @@ static sm_status SM_FN(implicit_grid)(sm_world *w, const sm_step_ctx *c) {
     const long nl = (long)nodes;
 #pragma omp parallel for schedule(static) num_threads(c->threads)
     for (long l = 0; l < nl; l++) {
-        size_t ni = (size_t)g->active_list[(size_t)l / IMP_BN] * IMP_BN + ((size_t)l & (IMP_BN - 1));
+        size_t ni = (size_t)l;
         double v[3] = {0, 0, 0}, dv[3] = {0, 0, 0}, xi[3];
         for (int a = 0; a < D; a++) {
             v[a] = (double)ws->z[l * D + a];
@@ -908,11 +1247,9 @@ static double SM_FN(implicit_jvp_check)(sm_world *w, const sm_step_ctx *c, uint6
     sm_implicit_ws *ws = &w->imp;
     const size_t nodes = g->nactive * IMP_BN;
     if (SM_FN(imp_reserve)(w, nodes, w->p.n, 2) != SM_OK) return INFINITY;
-    for (size_t b = 0; b < g->nblocks; b++) ws->bmap[b] = -1;
-    for (size_t t = 0; t < g->nactive; t++) ws->bmap[g->active_list[t]] = (int32_t)t;
     uint64_t st = seed;
     for (size_t l = 0; l < nodes; l++) {
-        size_t ni = (size_t)g->active_list[l / IMP_BN] * IMP_BN + (l & (IMP_BN - 1));
+        size_t ni = l;
         ws->mass[l] = g->m[ni] > 0 ? g->m[ni] : 0;
         for (int a = 0; a < D; a++) {
             st = st * 6364136223846793005ULL + 1442695040888963407ULL;

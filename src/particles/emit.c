@@ -66,7 +66,7 @@ int sm_world_add_emitter(sm_world *w, const sm_emitter_def *e) {
         return (sm_world_fail(w, SM_ERR_INVALID, "emitter shape: has no volume inside the usable domain"), -1);
     if (w->nemitters == w->emitters_cap) {
         int cap = w->emitters_cap ? 2 * w->emitters_cap : 4;
-        sm_emitter *q = realloc(w->emitters, (size_t)cap * sizeof *q);
+        sm_emitter *q = sm_realloc(w->emitters, (size_t)cap * sizeof *q);
         if (!q) return (sm_world_fail(w, SM_ERR_NOMEM, "out of memory"), -1);
         w->emitters = q;
         w->emitters_cap = cap;
@@ -95,7 +95,7 @@ sm_status sm_world_run_emitters(sm_world *w, double t0, double t1) {
         size_t count = (size_t)floor(em->owed / em->particle_mass);
         if (count == 0) continue;
         em->owed -= (double)count * em->particle_mass;
-        double *pos = malloc(count * 3 * sizeof(double)), *vel = malloc(count * 3 * sizeof(double));
+        double *pos = sm_malloc(count * 3 * sizeof(double)), *vel = sm_malloc(count * 3 * sizeof(double));
         if (!pos || !vel) {
             free(pos);
             free(vel);
@@ -147,6 +147,9 @@ double sm_shape_volume_estimate(const sm_shape *shape, const sm_shape *clip, int
 
 size_t sm_particle_bytes(int dim) {
     size_t d = (size_t)dim, dd = d * d;
-    /* x, v, B, F, tau, mass, vol0, q, alpha; material id; sort key and permutation */
-    return sizeof(sm_real) * (2 * d + 3 * dd + 4) + sizeof(uint16_t) + 2 * sizeof(uint32_t);
+    /* x, v, B, F, tau, mass, vol0, q, alpha; material id; sort key and permutation; the sparse
+     * grid's share: about 1.5 nodes per cell of material (live blocks reach one block beyond
+     * the particles), at 4 particles per cell or more, of 1 + 3d values each. */
+    size_t grid = (size_t)(1.5 / 4 * (double)(sizeof(sm_real) * (1 + 3 * d)) + 0.5);
+    return sizeof(sm_real) * (2 * d + 3 * dd + 4) + sizeof(uint16_t) + 2 * sizeof(uint32_t) + grid;
 }

@@ -4,7 +4,7 @@
 #include "world_internal.h"
 
 static int grow(void **ptr, size_t elem, size_t n) {
-    void *q = realloc(*ptr, elem * n);
+    void *q = sm_realloc(*ptr, elem * n);
     if (!q) return 0;
     *ptr = q;
     return 1;

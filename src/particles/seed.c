@@ -36,7 +36,7 @@ typedef struct ptbuf {
 static int ptbuf_push(ptbuf *b, const double x[3]) {
     if (b->n == b->cap) {
         size_t cap = b->cap ? 2 * b->cap : 4096;
-        double *q = realloc(b->x, cap * 3 * sizeof(double));
+        double *q = sm_realloc(b->x, cap * 3 * sizeof(double));
         if (!q) return 0;
         b->x = q;
         b->cap = cap;
@@ -124,7 +124,7 @@ static int seed_poisson(const sm_world *w, const sm_shape *shape, const sm_seed_
         ncell *= (size_t)nc[a];
     }
     if (ncell > ((size_t)1 << 31)) return 0;
-    int32_t *cell = malloc(ncell * sizeof(int32_t));
+    int32_t *cell = sm_malloc(ncell * sizeof(int32_t));
     ptbuf all = {0};
     size_t *active = NULL, nact = 0, capact = 0;
     if (!cell) return 0;
@@ -144,7 +144,7 @@ static int seed_poisson(const sm_world *w, const sm_shape *shape, const sm_seed_
     long ci[3];
     CELL_OF(x0, ci);
     cell[CELL_INDEX(ci)] = 0;
-    active = malloc(1024 * sizeof(size_t));
+    active = sm_malloc(1024 * sizeof(size_t));
     capact = 1024;
     if (!active) ok = 0;
     else active[nact++] = 0;
@@ -194,7 +194,7 @@ static int seed_poisson(const sm_world *w, const sm_shape *shape, const sm_seed_
             }
             cell[CELL_INDEX(yc)] = (int32_t)(all.n - 1);
             if (nact == capact) {
-                size_t *q2 = realloc(active, 2 * capact * sizeof(size_t));
+                size_t *q2 = sm_realloc(active, 2 * capact * sizeof(size_t));
                 if (!q2) {
                     ok = 0;
                     break;
@@ -248,7 +248,7 @@ sm_status sm_world_seed_shape(sm_world *w, const sm_shape *shape, const sm_seed_
     }
     sm_status st = SM_OK;
     if (pts.n > 0) {
-        double *vel = malloc(pts.n * 3 * sizeof(double));
+        double *vel = sm_malloc(pts.n * 3 * sizeof(double));
         if (!vel) {
             free(pts.x);
             return sm_world_fail(w, SM_ERR_NOMEM, "seed: out of memory");

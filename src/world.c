@@ -169,7 +169,7 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
             w->def.gravity[a] = 0;
         }
     }
-    sm_grid_init(&w->grid, def->dim, nodes);
+    sm_grid_init(&w->grid, def->dim, nodes, def->transfer == SM_TRANSFER_FLIP);
     w->threads = resolve_threads(def->threads);
     /* Domain walls: half-spaces 2 cells inside each face, behaving as def->wall_mode. */
     w->colliders = sm_calloc((size_t)(2 * def->dim + 4), sizeof *w->colliders);
@@ -210,8 +210,8 @@ size_t sm_world_memory_bytes(const sm_world *w) {
     const sm_particles *P = &w->p;
     const size_t d = (size_t)w->dim, dd = d * d;
     size_t b = sizeof *w;
-    b += P->cap * (sizeof(sm_real) * (2 * d + 3 * dd + 4) + sizeof(uint16_t));
-    b += w->perm_cap * 2 * sizeof(uint32_t);
+    b += P->cap * (sizeof(sm_real) * (2 * d + 2 * dd + SM_NTAU(d) + 3) + sizeof(uint16_t));
+    b += w->perm_cap * sizeof(uint32_t);
     b += sm_grid_bytes(&w->grid);
     b += w->pb_cap * sizeof(sm_pblock) + w->pb_hash.cap * (sizeof(uint64_t) + sizeof(uint32_t));
     b += w->pb_scratch_cap * sizeof(uint32_t) + w->sort_keys_cap * sizeof(uint64_t) + w->color_cap * sizeof(uint32_t);
@@ -222,6 +222,10 @@ size_t sm_world_memory_bytes(const sm_world *w) {
     b += ws->ncap * sizeof(sm_real) * (1 + 6 * d) + (size_t)ws->kcap * ws->ncap * d * sizeof(sm_real);
     b += ws->ncap * sizeof(sm_node_contact) + ws->pcap * (sizeof(sm_implicit_particle) + dd * sizeof(sm_real));
     b += ws->partial_cap * sizeof(double);
+    if (getenv("SM_MEMDEBUG"))
+        fprintf(stderr, "n %zu cap %zu perm %zu grid %zu (cap %zu blocks, active %zu, hash %zu) pb %zu pbh %zu scratch %zu sortk %zu cache %zu\n",
+                P->n, P->cap, w->perm_cap, sm_grid_bytes(&w->grid), w->grid.cap, w->grid.nactive, w->grid.hash.cap, w->pb_cap,
+                w->pb_hash.cap, w->pb_scratch_cap, w->sort_keys_cap, w->cache_cap);
     return b;
 }
 
@@ -233,7 +237,6 @@ void sm_world_destroy(sm_world *w) {
     free(w->colliders);
     free(w->emitters);
     sm_implicit_ws_free(&w->imp);
-    free(w->keys);
     free(w->perm);
     free(w->pb);
     sm_block_hash_free(&w->pb_hash);
@@ -333,6 +336,7 @@ int sm_world_add_material(sm_world *w, const sm_material_def *m) {
     sm_lame(m->youngs_modulus, m->poisson_ratio, &mu, &lambda);
     r->mu = (sm_real)mu;
     r->lambda = (sm_real)lambda;
+    r->density = (sm_real)m->density;
     r->plastic = (m->kind == SM_MATERIAL_SAND);
     r->hardening = r->plastic && m->hardening;
     r->h0 = m->h0 * DEG;
@@ -357,9 +361,6 @@ static sm_status reserve_particles(sm_world *w, size_t n) {
         return sm_world_fail(w, SM_ERR_NOMEM, "out of memory for %zu particles", n);
     if (n > w->perm_cap) {
         size_t cap = w->p.cap;
-        uint32_t *k = sm_realloc(w->keys, cap * sizeof(uint32_t));
-        if (!k) return sm_world_fail(w, SM_ERR_NOMEM, "out of memory");
-        w->keys = k;
         uint32_t *pm = sm_realloc(w->perm, cap * sizeof(uint32_t));
         if (!pm) return sm_world_fail(w, SM_ERR_NOMEM, "out of memory");
         w->perm = pm;
@@ -410,16 +411,20 @@ sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions,
         for (int k = 0; k < d * d; k++) {
             P->B[p * d * d + k] = 0;
             P->F[p * d * d + k] = (k % (d + 1) == 0) ? 1 : 0;
-            P->tau[p * d * d + k] = 0;
         }
+        for (int k = 0; k < SM_NTAU(d); k++) P->tau[p * SM_NTAU(d) + k] = 0;
         P->vol0[p] = (sm_real)vol0;
-        P->mass[p] = (sm_real)(vol0 * m->def.density);
         P->q[p] = 0;
         P->alpha[p] = m->alpha0;
         P->mat[p] = (uint16_t)material;
     }
     P->n = first + n;
     return SM_OK;
+}
+
+double sm_world_particle_mass(const sm_world *w, size_t i) {
+    if (i >= w->p.n) return 0;
+    return (double)sm_particle_mass(w->mats, &w->p, i);
 }
 
 void sm_world_particles(const sm_world *w, sm_particles_view *o) {
@@ -429,7 +434,6 @@ void sm_world_particles(const sm_world *w, sm_particles_view *o) {
     o->v = w->p.v;
     o->B = w->p.B;
     o->F = w->p.F;
-    o->mass = w->p.mass;
     o->vol0 = w->p.vol0;
     o->q = w->p.q;
     o->alpha = w->p.alpha;
@@ -592,7 +596,8 @@ static long first_bad_particle(const sm_world *w, double dt, int *fast) {
             ok &= isfinite(P->x[p * d + a]) && isfinite(P->v[p * d + a]);
             s2 += (double)P->v[p * d + a] * (double)P->v[p * d + a];
         }
-        for (int k = 0; k < dd; k++) ok &= isfinite(P->F[p * dd + k]) && isfinite(P->tau[p * dd + k]);
+        for (int k = 0; k < dd; k++) ok &= isfinite(P->F[p * dd + k]);
+        for (int k = 0; k < SM_NTAU(d); k++) ok &= isfinite(P->tau[p * SM_NTAU(d) + k]);
         if (!ok) return (long)p;
         if (s2 > lim2) {
             *fast = 1;
@@ -743,7 +748,7 @@ void sm_world_particle_totals(const sm_world *w, double *mass, double mom[3], do
     for (int a = 0; a < 3; a++) mom[a] = ang[a] = 0;
     const int apic = (w->def.transfer == SM_TRANSFER_APIC);
     for (size_t p = 0; p < P->n; p++) {
-        double m = (double)P->mass[p];
+        double m = (double)sm_particle_mass(w->mats, P, p);
         double x[3] = {0, 0, 0}, v[3] = {0, 0, 0}, B[9] = {0};
         for (int a = 0; a < d; a++) {
             x[a] = (double)P->x[p * d + a];
@@ -773,9 +778,9 @@ void sm_world_diagnostics(const sm_world *w, sm_diagnostics *o) {
         for (int a = 0; a < d; a++) {
             double va = (double)P->v[p * d + a];
             s += va * va;
-            com[a] += (double)P->mass[p] * (double)P->x[p * d + a];
+            com[a] += (double)sm_particle_mass(w->mats, P, p) * (double)P->x[p * d + a];
         }
-        ke += 0.5 * (double)P->mass[p] * s;
+        ke += 0.5 * (double)sm_particle_mass(w->mats, P, p) * s;
         if (s > vmax2) vmax2 = s;
     }
     o->kinetic_energy = ke;

@@ -12,6 +12,7 @@
 typedef struct sm_material_rt {
     sm_material_def def;
     sm_real mu, lambda;     /* Lame parameters, Pa */
+    sm_real density;        /* kg/m^3: a particle's mass is density * vol0 */
     int plastic;            /* 1 for sand */
     int hardening;          /* 1: alpha follows q through (3.79)-(3.80) */
     double h0, h1, h2, h3;  /* radians (h2 dimensionless) */
@@ -19,16 +20,19 @@ typedef struct sm_material_rt {
     double wave_speed;      /* sqrt((lambda + 2 mu)/rho), m/s */
 } sm_material_rt;
 
-/* Particles, structure of arrays. d = dim; matrices d*d row-major. */
+/* Particles, structure of arrays. d = dim; matrices d*d row-major. A particle's mass is its
+ * material's density times vol0 (not stored: memory is the budget, DESIGN §3). */
 typedef struct sm_particles {
     size_t n, cap;
     sm_real *x, *v, *B, *F;
-    sm_real *tau;           /* Kirchhoff stress of F^E (d*d), computed at the end of the previous
+    sm_real *tau;           /* Kirchhoff stress of F^E, symmetric, SM_NTAU(d) values (xx, yy, zz, xy,
+                               xz, yz in 3D; xx, yy, xy in 2D), computed at the end of the previous
                                step's plasticity (or at insertion): P F^T = tau, so the next P2G
                                needs no second SVD (one SVD per particle per step). */
-    sm_real *mass, *vol0, *q, *alpha;
+    sm_real *vol0, *q, *alpha;
     uint16_t *mat;
 } sm_particles;
+#define SM_NTAU(d) ((d) == 3 ? 6 : 3)
 
 /* A particle block: the particles whose stencil starts in grid block `key`. They touch nodes
  * 4 b .. 4 b + 6 per axis only, i.e. the live grid blocks b + {0,1}^d: gslot[c] with
@@ -130,7 +134,6 @@ struct sm_world {
 
     /* Binning (step_dim.c sort), grown as needed, never shrunk. Particles are binned by the grid
      * block holding their stencil's first node ("particle blocks"). */
-    uint32_t *keys;         /* per particle during the sort: its particle block */
     uint32_t *perm;         /* particle indices grouped by particle block (stable) */
     size_t perm_cap;
     sm_pblock *pb;          /* this step's non-empty particle blocks, ascending key */
@@ -175,6 +178,11 @@ sm_status sm_world_fail(sm_world *w, sm_status status, const char *fmt, ...)
 
 /* Runs the emitters for the step [t0, t1]. */
 sm_status sm_world_run_emitters(sm_world *w, double t0, double t1);
+
+/* Mass of particle p. */
+static inline sm_real sm_particle_mass(const sm_material_rt *mats, const sm_particles *P, size_t p) {
+    return mats[P->mat[p]].density * P->vol0[p];
+}
 
 /* Grows particle storage to hold at least n particles. */
 sm_status sm_particles_reserve(sm_particles *p, int dim, size_t n);

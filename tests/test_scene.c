@@ -46,7 +46,7 @@ static double mass_of(const sm_world *w, int mat, size_t *count) {
     *count = 0;
     for (size_t i = 0; i < pv.n; i++)
         if (pv.material[i] == mat) {
-            if (m < 0) m = pv.mass[i];
+            if (m < 0) m = sm_world_particle_mass(w, i);
             (*count)++;
         }
     return m;

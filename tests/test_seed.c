@@ -48,7 +48,7 @@ int main(void) {
                 double vol0 = pow(dx, dim) / ppc, worst_in = -1;
                 for (size_t i = 0; i < pv.n; i++) {
                     CHECK_REL(pv.vol0[i], vol0, 1e-6, 0);
-                    CHECK_REL(pv.mass[i], 2200 * vol0, 1e-6, 0);
+                    CHECK_REL(sm_world_particle_mass(w, i), 2200 * vol0, 1e-6, 0);
                     double x[3] = {0, 0, 0};
                     for (int a = 0; a < dim; a++) x[a] = pv.x[i * dim + a];
                     worst_in = fmax(worst_in, sm_shape_distance(&box, dim, x, NULL));

@@ -38,7 +38,7 @@ static sm_world *make(int dim, sm_kernel kernel, sm_transfer transfer, unsigned 
     CHECK(sm_world_add_particles(w, n, x, v, mat, 8) == SM_OK);
     /* Different masses per particle: scale via direct access (test hook). */
     for (size_t i = 0; i < n; i++) {
-        w->p.mass[i] *= (sm_real)sm_test_uniform(&seed, 0.5, 2.0);
+        w->p.vol0[i] *= (sm_real)sm_test_uniform(&seed, 0.5, 2.0); /* mass = density vol0 */
         if (transfer == SM_TRANSFER_APIC)
             for (int k = 0; k < dim * dim; k++) w->p.B[i * dim * dim + k] = (sm_real)sm_test_uniform(&seed, -0.01, 0.01);
     }

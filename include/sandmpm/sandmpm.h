@@ -245,7 +245,6 @@ typedef struct sm_particles_view {
     const sm_real *v;     /**< velocities, n*d */
     const sm_real *B;     /**< APIC affine momentum matrices, n*d*d, row-major */
     const sm_real *F;     /**< elastic deformation gradients F^E, n*d*d, row-major */
-    const sm_real *mass;  /**< kg, n */
     const sm_real *vol0;  /**< initial volume V0, n */
     const sm_real *q;     /**< hardening state, n */
     const sm_real *alpha; /**< Drucker–Prager alpha, n */
@@ -253,6 +252,10 @@ typedef struct sm_particles_view {
 } sm_particles_view;
 
 void sm_world_particles(const sm_world *w, sm_particles_view *out);
+
+/** Mass of particle i in kg (its material's density times vol0; not stored per particle);
+ *  0 if i is out of range. */
+double sm_world_particle_mass(const sm_world *w, size_t i);
 
 /** Writable velocity access (e.g. to give an object a kick); n*d values. */
 sm_real *sm_world_particle_velocities(sm_world *w);

@@ -29,9 +29,10 @@ void sm_block_hash_free(sm_block_hash *h) {
     memset(h, 0, sizeof *h);
 }
 
-void sm_grid_init(sm_grid *g, int dim, const int nodes[3]) {
+void sm_grid_init(sm_grid *g, int dim, const int nodes[3], int separate_vt) {
     memset(g, 0, sizeof *g);
     g->dim = dim;
+    g->separate_vt = separate_vt;
     for (int a = 0; a < 3; a++) {
         g->nodes[a] = (a < dim) ? nodes[a] : 1;
         g->blocks[a] = (a < dim) ? (nodes[a] + SM_BLOCK - 1) / SM_BLOCK : 1;
@@ -44,14 +45,14 @@ void sm_grid_free(sm_grid *g) {
     free(g->m);
     free(g->v);
     free(g->f);
-    free(g->vt);
+    if (g->separate_vt) free(g->vt);
     sm_block_hash_free(&g->hash);
     memset(g, 0, sizeof *g);
 }
 
 size_t sm_grid_bytes(const sm_grid *g) {
     size_t nn = g->cap * (size_t)g->block_nodes;
-    return nn * sizeof(sm_real) * (1 + 3 * (size_t)g->dim) + g->cap * sizeof(uint64_t) +
+    return nn * sizeof(sm_real) * (1 + (g->separate_vt ? 3 : 2) * (size_t)g->dim) + g->cap * sizeof(uint64_t) +
            g->hash.cap * (sizeof(uint64_t) + sizeof(uint32_t));
 }
 
@@ -65,11 +66,12 @@ sm_status sm_grid_reserve(sm_grid *g, size_t nblocks) {
     if (!k) return SM_ERR_NOMEM;
     g->key = k;
     sm_real **arr[4] = {&g->m, &g->v, &g->f, &g->vt};
-    for (int i = 0; i < 4; i++) {
+    for (int i = 0; i < (g->separate_vt ? 4 : 3); i++) {
         sm_real *q = sm_realloc(*arr[i], nn * (i == 0 ? 1 : d) * sizeof(sm_real));
         if (!q) return SM_ERR_NOMEM;
         *arr[i] = q;
     }
+    if (!g->separate_vt) g->vt = g->v;
     g->cap = cap;
     return SM_OK;
 }

@@ -8,7 +8,8 @@
  * particles cost. A hash table maps keys to slots (rebuilt each step, grown only when needed).
  *
  * Per node: mass, v (momentum during P2G, then v^n), f (force during P2G, then v-bar), vt
- * (v-tilde, the final velocity). Vectors are stored per node (node*d + axis). */
+ * (v-tilde, the final velocity). Vectors are stored per node (node*d + axis). Only FLIP needs
+ * v^n after the grid update; otherwise vt shares v's storage (v-tilde overwrites v^n). */
 #ifndef SM_GRID_H
 #define SM_GRID_H
 
@@ -79,11 +80,12 @@ typedef struct sm_grid {
     size_t cap;       /* blocks allocated */
     uint64_t *key;    /* per slot, ascending */
     sm_real *m, *v, *f, *vt;
+    int separate_vt;  /* vt has its own storage (FLIP), else vt == v */
     sm_block_hash hash; /* key -> slot of the live blocks */
 } sm_grid;
 
 /* An empty grid for a domain of nodes[] nodes; no block storage yet. */
-void sm_grid_init(sm_grid *g, int dim, const int nodes[3]);
+void sm_grid_init(sm_grid *g, int dim, const int nodes[3], int separate_vt);
 void sm_grid_free(sm_grid *g);
 /* Bytes held by the grid (allocated blocks and the hash table). */
 size_t sm_grid_bytes(const sm_grid *g);

@@ -35,6 +35,7 @@
 
 #include "material/implicit.h"
 #include "material/material.h"
+#include "material/plastic_batch.h"
 #include "math/svd.h"
 #include "transfer/kernel.h"
 #include "world_internal.h"
@@ -171,17 +172,16 @@ static void reorder_particles(sm_world *w) {
             continue;
         }
         /* Position j receives the particle at perm[j]; save position i's particle first. */
-        sm_real x[D], v[D], B[DD], F[DD], tau[DD], scal[4];
+        sm_real x[D], v[D], B[DD], F[DD], tau[SM_NTAU(D)], scal[3];
         uint16_t mat = P->mat[i];
         memcpy(x, P->x + i * D, sizeof x);
         memcpy(v, P->v + i * D, sizeof v);
         memcpy(B, P->B + i * DD, sizeof B);
         memcpy(F, P->F + i * DD, sizeof F);
-        memcpy(tau, P->tau + i * DD, sizeof tau);
-        scal[0] = P->mass[i];
-        scal[1] = P->vol0[i];
-        scal[2] = P->q[i];
-        scal[3] = P->alpha[i];
+        memcpy(tau, P->tau + i * SM_NTAU(D), sizeof tau);
+        scal[0] = P->vol0[i];
+        scal[1] = P->q[i];
+        scal[2] = P->alpha[i];
         size_t j = i;
         for (;;) {
             size_t src = perm[j];
@@ -191,8 +191,7 @@ static void reorder_particles(sm_world *w) {
             memcpy(P->v + j * D, P->v + src * D, sizeof v);
             memcpy(P->B + j * DD, P->B + src * DD, sizeof B);
             memcpy(P->F + j * DD, P->F + src * DD, sizeof F);
-            memcpy(P->tau + j * DD, P->tau + src * DD, sizeof tau);
-            P->mass[j] = P->mass[src];
+            memcpy(P->tau + j * SM_NTAU(D), P->tau + src * SM_NTAU(D), sizeof tau);
             P->vol0[j] = P->vol0[src];
             P->q[j] = P->q[src];
             P->alpha[j] = P->alpha[src];
@@ -203,11 +202,10 @@ static void reorder_particles(sm_world *w) {
         memcpy(P->v + j * D, v, sizeof v);
         memcpy(P->B + j * DD, B, sizeof B);
         memcpy(P->F + j * DD, F, sizeof F);
-        memcpy(P->tau + j * DD, tau, sizeof tau);
-        P->mass[j] = scal[0];
-        P->vol0[j] = scal[1];
-        P->q[j] = scal[2];
-        P->alpha[j] = scal[3];
+        memcpy(P->tau + j * SM_NTAU(D), tau, sizeof tau);
+        P->vol0[j] = scal[0];
+        P->q[j] = scal[1];
+        P->alpha[j] = scal[2];
         P->mat[j] = mat;
     }
     for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
@@ -218,55 +216,57 @@ static sm_status SM_FN(sort)(sm_world *w, const sm_step_ctx *c) {
     sm_grid *g = &w->grid;
     const size_t n = w->p.n;
     const int S = stencil_size(w);
-    const long nl = (long)n;
     const sm_real *x = w->p.x;
-    uint32_t *keys = w->keys;
     const int T = c->threads > 0 ? c->threads : 1;
 
-    /* 1. Each particle's block among the previous step's blocks (read-only hash lookups). */
+    /* 1. Count each chunk's particles per block of the previous step (read-only hash lookups;
+     * consecutive particles mostly share a block). Keys are recomputed, not stored. */
     sm_block_hash *ph = &w->pb_hash;
-    long misses = 0;
-#pragma omp parallel for schedule(static) reduction(+ : misses) num_threads(T)
-    for (long p = 0; p < nl; p++) {
-        uint32_t s = sm_block_hash_find(ph, particle_key(c, x + (size_t)p * D, S));
-        keys[p] = s;
-        misses += (s == SM_NO_SLOT);
-    }
-    /* 2. New blocks, in particle order (serial, deterministic). */
     size_t nb = w->npb;
-    if (misses > 0) {
-        size_t need = nb + (size_t)misses;
-        if (grow((void **)&w->pb, &w->pb_cap, need, sizeof *w->pb) != SM_OK) return SM_ERR_NOMEM;
-        if (ph->cap < 2 * need) {
-            if (sm_block_hash_reserve(ph, need) != SM_OK) return SM_ERR_NOMEM;
-            for (size_t b = 0; b < nb; b++) sm_block_hash_put(ph, w->pb[b].key, (uint32_t)b);
-        }
-        uint64_t last = UINT64_MAX;
-        uint32_t last_slot = SM_NO_SLOT;
-        for (size_t p = 0; p < n; p++) {
-            if (keys[p] != SM_NO_SLOT) continue;
-            uint64_t k = particle_key(c, x + p * D, S);
-            if (k != last) {
-                last = k;
-                last_slot = sm_block_hash_put(ph, k, (uint32_t)nb);
-                if (last_slot == nb) w->pb[nb++].key = k;
+    long misses = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        if (grow((void **)&w->pb_scratch, &w->pb_scratch_cap, (size_t)(T + 1) * nb + 1, sizeof(uint32_t)) != SM_OK)
+            return SM_ERR_NOMEM;
+        uint32_t *cnt = w->pb_scratch;
+        memset(cnt, 0, (size_t)T * nb * sizeof(uint32_t));
+        misses = 0;
+#pragma omp parallel for schedule(static, 1) reduction(+ : misses) num_threads(T)
+        for (int t = 0; t < T; t++) {
+            size_t p0 = n * (size_t)t / (size_t)T, p1 = n * (size_t)(t + 1) / (size_t)T;
+            uint32_t *ct = cnt + (size_t)t * nb;
+            uint64_t last = UINT64_MAX;
+            uint32_t slot = SM_NO_SLOT;
+            for (size_t p = p0; p < p1; p++) {
+                uint64_t k = particle_key(c, x + p * D, S);
+                if (k != last) {
+                    last = k;
+                    slot = sm_block_hash_find(ph, k);
+                }
+                if (slot == SM_NO_SLOT) misses++;
+                else ct[slot]++;
             }
-            keys[p] = last_slot;
+        }
+        if (misses == 0) break;
+        SM_ASSERT(pass == 0);
+        /* 2. New blocks, in particle order (serial, deterministic); then count again. */
+        uint64_t last = UINT64_MAX;
+        for (size_t p = 0; p < n; p++) {
+            uint64_t k = particle_key(c, x + p * D, S);
+            if (k == last) continue;
+            last = k;
+            if (sm_block_hash_find(ph, k) != SM_NO_SLOT) continue;
+            if (grow((void **)&w->pb, &w->pb_cap, nb + 1, sizeof *w->pb) != SM_OK) return SM_ERR_NOMEM;
+            if (ph->cap < 2 * (nb + 1)) {
+                if (sm_block_hash_reserve(ph, nb + 1) != SM_OK) return SM_ERR_NOMEM;
+                for (size_t q = 0; q < nb; q++) sm_block_hash_put(ph, w->pb[q].key, (uint32_t)q);
+            }
+            sm_block_hash_put(ph, k, (uint32_t)nb);
+            w->pb[nb++].key = k;
         }
     }
-    /* 3. Stable counting sort by block, blocks in ascending key order. Scratch: per-thread
-     * counts (T nb), then ranks (nb). */
-    if (grow((void **)&w->pb_scratch, &w->pb_scratch_cap, (size_t)(T + 1) * nb + 1, sizeof(uint32_t)) != SM_OK ||
-        grow((void **)&w->sort_keys, &w->sort_keys_cap, 2 * nb + 2, sizeof(uint64_t)) != SM_OK)
-        return SM_ERR_NOMEM;
+    /* 3. Stable counting sort by block, blocks in ascending key order. */
+    if (grow((void **)&w->sort_keys, &w->sort_keys_cap, 2 * nb + 2, sizeof(uint64_t)) != SM_OK) return SM_ERR_NOMEM;
     uint32_t *cnt = w->pb_scratch, *rank = w->pb_scratch + (size_t)T * nb;
-    memset(cnt, 0, (size_t)T * nb * sizeof(uint32_t));
-#pragma omp parallel for schedule(static, 1) num_threads(T)
-    for (int t = 0; t < T; t++) {
-        size_t p0 = n * (size_t)t / (size_t)T, p1 = n * (size_t)(t + 1) / (size_t)T;
-        uint32_t *ct = cnt + (size_t)t * nb;
-        for (size_t p = p0; p < p1; p++) ct[keys[p]]++;
-    }
     uint64_t *pairs = w->sort_keys;
     size_t nne = 0;
     for (size_t b = 0; b < nb; b++) {
@@ -295,7 +295,16 @@ static sm_status SM_FN(sort)(sm_world *w, const sm_step_ctx *c) {
     for (int t = 0; t < T; t++) {
         size_t p0 = n * (size_t)t / (size_t)T, p1 = n * (size_t)(t + 1) / (size_t)T;
         uint32_t *ct = cnt + (size_t)t * nb;
-        for (size_t p = p0; p < p1; p++) w->perm[ct[keys[p]]++] = (uint32_t)p;
+        uint64_t last = UINT64_MAX;
+        uint32_t slot = 0;
+        for (size_t p = p0; p < p1; p++) {
+            uint64_t k = particle_key(c, x + p * D, S);
+            if (k != last) {
+                last = k;
+                slot = sm_block_hash_find(ph, k);
+            }
+            w->perm[ct[slot]++] = (uint32_t)p;
+        }
     }
     /* The new block list (ascending key) and its hash. cnt[T-1 row] now holds block ends. */
     {
@@ -398,14 +407,24 @@ static inline __attribute__((always_inline)) void p2g_block(sm_world *w, const s
         const size_t p = w->perm[idx];
         weights W;
         kernel_weights(S, P->x + p * D, c, bc, &W);
-        const sm_real mp = P->mass[p];
+        const sm_real mp = sm_particle_mass(w->mats, P, p);
         const sm_real *vp = P->v + p * D;
         sm_real mC[DD], Vt[DD];
         const sm_real vf = with_force ? -P->vol0[p] : 0;
-        for (int k = 0; k < DD; k++) {
-            mC[k] = apic ? mp * P->B[p * DD + k] * dinv : 0;
-            Vt[k] = vf * P->tau[p * DD + k];
-        }
+        const sm_real *tp = P->tau + p * SM_NTAU(D);
+        for (int k = 0; k < DD; k++) mC[k] = apic ? mp * P->B[p * DD + k] * dinv : 0;
+#if D == 2
+        Vt[0] = vf * tp[0];
+        Vt[3] = vf * tp[1];
+        Vt[1] = Vt[2] = vf * tp[2];
+#else
+        Vt[0] = vf * tp[0];
+        Vt[4] = vf * tp[1];
+        Vt[8] = vf * tp[2];
+        Vt[1] = Vt[3] = vf * tp[3];
+        Vt[2] = Vt[6] = vf * tp[4];
+        Vt[5] = Vt[7] = vf * tp[5];
+#endif
         vec A = {0}, Ce[D], Ve[D];
         A[0] = mp;
         for (int a = 0; a < D; a++) A[1 + a] = mp * vp[a];
@@ -736,44 +755,74 @@ static inline void svd_d(const sm_real *F, sm_real *U, sm_real *s, sm_real *V) {
 #endif
 }
 
+/* Symmetric tau = U diag(t) U^T, stored as SM_NTAU(D) values (world_internal.h). */
+static inline void store_tau(sm_real *T, const sm_real *U, const sm_real *t) {
+    static const int ia[6] = {0, 1, 2, 0, 0, 1}, ie[6] = {0, 1, 2, 1, 2, 2};
+    static const int ia2[3] = {0, 1, 0}, ie2[3] = {0, 1, 1};
+    for (int k = 0; k < SM_NTAU(D); k++) {
+        const int a = D == 3 ? ia[k] : ia2[k], e = D == 3 ? ie[k] : ie2[k];
+        sm_real acc = 0;
+        for (int j = 0; j < D; j++) acc += U[a * D + j] * t[j] * U[e * D + j];
+        T[k] = acc;
+    }
+}
+
+/* Algorithm 2 in batches of SM_PLASTIC_LANES consecutive particles (material/plastic_batch.h):
+ * every particle goes through the same lane-wise operations whatever its batch, so the result
+ * does not depend on the thread count. */
 static void SM_FN(plasticity)(sm_world *w, const sm_step_ctx *c, size_t first) {
     sm_particles *P = &w->p;
-    const long n = (long)P->n;
+    const size_t n = P->n;
     const sm_material_rt *mats = w->mats;
-    (void)c;
-    int nt = c ? c->threads : 1;
-#pragma omp parallel for schedule(static) num_threads(nt)
-    for (long i = (long)first; i < n; i++) {
-        size_t p = (size_t)i;
-        const sm_material_rt *m = &mats[P->mat[p]];
-        sm_real *F = P->F + p * DD;
-        sm_real U[DD], V[DD], s[D], tau[D];
-        svd_d(F, U, s, V);
-        if (m->plastic) {
-            sm_real dq = 0;
-            int kase = sm_dp_project(D, s, P->alpha[p], m->mu, m->lambda, s, &dq);
-            if (kase != 1) {
-                for (int a = 0; a < D; a++)
-                    for (int e = 0; e < D; e++) {
-                        sm_real acc = 0;
-                        for (int k = 0; k < D; k++) acc += U[a * D + k] * s[k] * V[e * D + k];
-                        F[a * D + e] = acc;
-                    }
-                if (m->hardening && dq > 0) {
-                    P->q[p] += dq;
-                    double phi = sm_hardening_phi((double)P->q[p], m->h0, m->h1, m->h2, m->h3);
-                    P->alpha[p] = (sm_real)sm_dp_alpha(phi);
+    const int nt = c ? c->threads : 1;
+    enum { L = SM_PLASTIC_LANES };
+    const long nbatch = (long)((n - first + L - 1) / L);
+#pragma omp parallel num_threads(nt)
+    {
+        sm_plastic_lanes b;
+#pragma omp for schedule(static)
+        for (long t = 0; t < nbatch; t++) {
+            const size_t p0 = first + (size_t)t * L;
+            const int cnt = (int)(n - p0 < (size_t)L ? n - p0 : (size_t)L);
+            for (int l = 0; l < L; l++) {
+                if (l < cnt) {
+                    const size_t p = p0 + (size_t)l;
+                    const sm_material_rt *m = &mats[P->mat[p]];
+                    for (int k = 0; k < DD; k++) b.F[k][l] = P->F[p * DD + k];
+                    b.alpha[l] = P->alpha[p];
+                    b.q[l] = P->q[p];
+                    b.mu[l] = m->mu;
+                    b.lambda[l] = m->lambda;
+                    b.h0[l] = (sm_real)m->h0;
+                    b.h1[l] = (sm_real)m->h1;
+                    b.h2[l] = (sm_real)m->h2;
+                    b.h3[l] = (sm_real)m->h3;
+                    b.plastic[l] = m->plastic;
+                    b.hardening[l] = m->hardening;
+                } else { /* padding: an undeformed elastic particle */
+                    for (int k = 0; k < DD; k++) b.F[k][l] = (k % (D + 1) == 0) ? 1 : 0;
+                    b.alpha[l] = b.q[l] = 0;
+                    b.mu[l] = 1;
+                    b.lambda[l] = 0;
+                    b.h0[l] = b.h1[l] = b.h2[l] = b.h3[l] = 0;
+                    b.plastic[l] = b.hardening[l] = 0;
                 }
             }
-        }
-        sm_hencky_tau(D, s, m->mu, m->lambda, tau);
-        sm_real *T = P->tau + p * DD;
-        for (int a = 0; a < D; a++)
-            for (int e = 0; e < D; e++) {
-                sm_real acc = 0;
-                for (int k = 0; k < D; k++) acc += U[a * D + k] * tau[k] * U[e * D + k];
-                T[a * D + e] = acc;
+#if D == 2
+            sm_plastic_lanes2(&b);
+            static const int ta[3] = {0, 3, 1};
+#else
+            sm_plastic_lanes3(&b);
+            static const int ta[6] = {0, 4, 8, 1, 2, 5};
+#endif
+            for (int l = 0; l < cnt; l++) {
+                const size_t p = p0 + (size_t)l;
+                for (int k = 0; k < DD; k++) P->F[p * DD + k] = b.F[k][l];
+                P->alpha[p] = b.alpha[l];
+                P->q[p] = b.q[l];
+                for (int k = 0; k < SM_NTAU(D); k++) P->tau[p * SM_NTAU(D) + k] = b.tau[ta[k]][l];
             }
+        }
     }
 }
 

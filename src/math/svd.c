@@ -2,29 +2,27 @@
  *
  * Method (own code; only published facts are used):
  *
- * 3x3 -- the scheme of McAdams, Selle, Tamstorf, Teran and Sifakis, "Computing the Singular Value
- * Decomposition of 3x3 matrices with minimal branching and elementary floating point
- * operations" (Univ. of Wisconsin-Madison, CS Tech. Report 1690, 2011), with exact instead of
- * approximate rotations and one extra clean-up step:
- *   1. Scale F by 1/max|F_ij| so that F^T F can neither overflow nor underflow.
- *   2. Cyclic Jacobi eigen-decomposition of the symmetric A = F^T F = V L V^T: a fixed number of
- *      sweeps over the pairs (0,1), (0,2), (1,2). Each rotation is the exact Jacobi rotation with
- *      the stable small root t = tan(theta), |t| <= 1, and the updates a_pp - t a_pq,
- *      a_qq + t a_pq (Golub & Van Loan, "Matrix Computations", sec. 8.5; Rutishauser). A pivot
- *      below eps sqrt(a_pp a_qq) is skipped (the relative threshold of Demmel & Veselic, "Jacobi's
- *      method is more accurate than QR", 1992), so near-rotations do not pick up noise.
- *   3. B = F V; order the columns of B (and V) by decreasing norm with a 3-comparator network.
- *      An odd permutation negates the last column of both, so det V stays +1 and B = F V.
- *   4. Givens QR of B: B = Q R. Q is a product of rotations (det +1), R_00 and R_11 come out
- *      >= 0, so det F is carried by R_22: this is how McAdams et al. obtain the signed SVD.
- *      As the columns of R come from F v_j, not from the eigenvalues of F^T F, the small singular
- *      values are accurate to O(eps ||F||) absolutely (not O(sqrt(eps) ||F||)).
- *   5. Clean-up (ours): once the Jacobi iteration has converged, R_01 and R_02 are
- *      O(eps ||F||), but R_12 ~ (V^T A V)_12 / sigma_1 is only O(eps ||F||^2 / sigma_1), which is
- *      large when sigma_1 and sigma_2 are both small (e.g. sigma = (1, 1e-8, 5e-9): their
- *      eigenvectors in F^T F are not resolved). So the trailing 2x2 block of R is diagonalised
- *      with the 2x2 SVD below and folded into U and V. This makes the result backward stable:
- *      ||F - U S V^T|| = O(eps ||F||) for every F.
+ * 3x3 -- after McAdams, Selle, Tamstorf, Teran and Sifakis, "Computing the Singular Value
+ * Decomposition of 3x3 matrices with minimal branching and elementary floating point operations"
+ * (Univ. of Wisconsin-Madison, CS Tech. Report 1690, 2011), with our own rotation formula, QR and
+ * clean-up (see the functions for details):
+ *   1. F is used as is when max|F_ij| is in [SVD_LO, SVD_HI], else scaled by 1/max (rare branch).
+ *   2. Cyclic Jacobi sweeps on A = F^T F with approximate rotations accumulated in a quaternion:
+ *      the half-angle tangent comes from a [1/2] Pade approximant (no sqrt; convergence of order
+ *      5 near the end), +-pi/4 rotations when the diagonal entries are nearly equal; the
+ *      rotations are applied unnormalised (A and the quaternion pick up positive factors only).
+ *      The sweeps stop when every off-diagonal entry is <= eps * max diagonal (typically 3-5
+ *      sweeps in double, 2-4 in float; at most SM_SVD_SWEEPS).
+ *   3. V from the quaternion, B = F V, columns sorted by norm (odd permutation: last column
+ *      negated so det V = +1).
+ *   4. QR of B: u0 = b0/|b0|, u2 = b0 x b1 / |.|, u1 = u2 x u0 (a rotation by construction; R_22
+ *      carries the sign of det F); Givens rotations instead if b1 is ~parallel to b0 or ~0
+ *      (rank <= 1, rare branch).
+ *   5. The trailing 2x2 block is diagonalised by the 2x2 SVD below only when its off-diagonal
+ *      exceeds eps * R_00 (needed when sigma_1 and sigma_2 are both tiny). R_01, R_02 are
+ *      O(eps R_00) after step 2 and dropped: backward stable, ||F - U S V^T|| = O(eps ||F||).
+ * Measured (tests/test_svd.c -v): reconstruction <= 5.5 eps, orthogonality <= 6.7 eps, sigma
+ * within 8 eps ||F|| of the exact one, double and float.
  *
  * 2x2 -- symmetrise, then diagonalise (the 2x2 step of the two-sided Jacobi SVD; Brent, Luk and
  * Van Loan 1985; Golub & Van Loan sec. 8.6): the rotation R with
@@ -36,10 +34,8 @@
  * Signed convention (last singular value negative for inverted elements): Irving, Teran and
  * Fedkiw, "Invertible Finite Elements for Robust Simulation of Large Deformation" (SCA 2004).
  *
- * Control flow: fixed sweep count, no data-dependent jumps except one rarely taken branch for
- * all-subnormal input; comparisons become min/max, integer selects or arithmetic blends.
- * Cost: dominated by the 12 sequential Jacobi rotations (2 sqrt + 2 div each, on the critical
- * path), then the 3 Givens rotations and the 2x2 SVD. */
+ * Control flow: the sweep loop's early exit and the two rare branches above; everything else is
+ * selects/arithmetic blends (unpredictable comparisons must not become jumps). */
 #include "math/svd.h"
 
 #include <float.h>
@@ -56,11 +52,10 @@
 #define svd_copysign copysignf
 #endif
 
-/* Cyclic Jacobi sweeps on F^T F. Measured (tens of millions of random, graded, clustered and
- * near-rotation matrices, plus an adversarial search): 3 sweeps leave errors up to ~1e-5 in double
- * and ~100 eps in float; 4 sweeps reach full accuracy (<= 11 eps) in both; 5 change nothing. */
+/* Maximum number of Jacobi sweeps of sm_svd3 (the loop stops earlier on convergence; on 10^5
+ * random matrices the most needed was 6 in double and 5 in float). */
 #ifndef SM_SVD_SWEEPS
-#define SM_SVD_SWEEPS 4
+#define SM_SVD_SWEEPS 8
 #endif
 
 #define SVD_ONE SM_R(1.0)
@@ -154,24 +149,70 @@ void sm_svd2(const sm_real F[4], sm_real U[4], sm_real sigma[2], sm_real V[4]) {
     sigma[1] *= scale;
 }
 
-/* One Jacobi rotation of the symmetric 3x3 A in the plane (p, q) (r is the third index; arp, arq
- * are A_rp, A_rq), accumulated into the columns p, q of V (row-major). */
-static inline void svd3_jacobi(sm_real *app, sm_real *aqq, sm_real *apq, sm_real *arp,
-                               sm_real *arq, sm_real V[9], int p, int q) {
-    sm_real t = svd_jacobi_t(*app, *apq, *aqq);
-    sm_real c = SVD_ONE / sm_sqrt(SVD_ONE + t * t);
-    sm_real s = t * c;
-    sm_real rp = *arp, rq = *arq;
-    *app -= t * *apq;
-    *aqq += t * *apq;
-    *apq = 0;
-    *arp = c * rp - s * rq;
-    *arq = s * rp + c * rq;
-    for (int k = 0; k < 3; k++) {
-        sm_real vp = V[3 * k + p], vq = V[3 * k + q];
-        V[3 * k + p] = c * vp - s * vq;
-        V[3 * k + q] = s * vp + c * vq;
+/* ---- 3x3 ---------------------------------------------------------------------------------- */
+
+/* Quaternion (w, x, y, z), unnormalised, times the rotation about axis r by the half-angle
+ * (ch, sh) (also unnormalised): q <- q (ch + sg sh e_r), sg = +-1. */
+static inline void svd_quat_mul_axis(sm_real *q, int r, sm_real ch, sm_real sh) {
+    sm_real w = q[0], v0 = q[1], v1 = q[2], v2 = q[3];
+    /* (w, v) (c, s e) = (w c - s v.e, w s e + c v + s v x e) */
+    if (r == 0) {
+        q[0] = w * ch - sh * v0;
+        q[1] = w * sh + ch * v0;
+        q[2] = ch * v1 + sh * v2;
+        q[3] = ch * v2 - sh * v1;
+    } else if (r == 1) {
+        q[0] = w * ch - sh * v1;
+        q[1] = ch * v0 - sh * v2;
+        q[2] = w * sh + ch * v1;
+        q[3] = ch * v2 + sh * v0;
+    } else {
+        q[0] = w * ch - sh * v2;
+        q[1] = ch * v0 + sh * v1;
+        q[2] = ch * v1 - sh * v0;
+        q[3] = w * sh + ch * v2;
     }
+}
+
+#define SVD_C8 SM_R(0.92387953251128675613) /* cos(pi/8) */
+#define SVD_S8 SM_R(0.38268343236508977173) /* sin(pi/8) */
+#define SVD_PADE_X SM_R(0.5)                 /* Pade rotation when 0.5 a_pq^2 < (a_qq - a_pp)^2 */
+
+/* One approximate Jacobi rotation of the symmetric A in the plane (p, q), r the third index
+ * (arr = A_rr, arp = A_rp, arq = A_rq), accumulated into the quaternion quat.
+ *
+ * The rotation J (J_pp = J_qq = cos t, J_pq = -J_qp = sin t) that zeroes A_pq has
+ * tan 2t = x = 2 a_pq / (a_qq - a_pp); its quaternion has the half angle t/2 with
+ * tan(t/2) = tan(atan(x) / 4) = x/4 - 5 x^3 / 64 + O(x^5). We use the [1/2] Pade approximant
+ * x/4 / (1 + 5 x^2 / 16), homogeneous in (a_qq - a_pp, a_pq): (ch, sh) ~ (4 d^2 + 5 b^2, 2 b d),
+ * with relative error O(x^4), so the sweeps converge with order 5 once the pivots are small.
+ * For large |x| (nearly equal diagonal entries) the rotation is by +-pi/4 (half angle pi/8), as
+ * in McAdams et al. 2011. Neither needs a square root; one division keeps (1, tau) normalised
+ * to within a factor 1.1. The rotation is applied unnormalised: with c = ch^2 - sh^2,
+ * s = 2 ch sh, m = ch^2 + sh^2, the matrix [[c, s], [-s, c]] (and m on the r axis) is m times a
+ * rotation, so A is updated up to the positive factor m^2 -- harmless, as only ratios of its
+ * entries matter -- and the quaternion up to the factor sqrt(m), removed at the end. */
+static inline void svd3_rot(sm_real *app, sm_real *aqq, sm_real *apq, sm_real *arp, sm_real *arq,
+                            sm_real *arr, sm_real *quat, int r, sm_real sgn) {
+    sm_real d = *aqq - *app, b = *apq;
+    sm_real dd = d * d, bb = b * b;
+    sm_real ap = (sm_real)(SVD_PADE_X * bb < dd), fb = SVD_ONE - ap;
+    sm_real ch = 4 * dd + 5 * bb, sh = 2 * b * d;
+    sm_real tau = sh / (ap * ch + fb); /* no 0/0: ch > 0 when ap = 1 */
+    sm_real c1 = ap + fb * SVD_C8;
+    sm_real s1 = ap * tau + fb * svd_copysign(SVD_S8, b * d);
+    sm_real cc = c1 * c1, ss = s1 * s1;
+    sm_real c = cc - ss, s = 2 * c1 * s1, m = cc + ss;
+    sm_real a = *app, e = *aqq;
+    sm_real c2 = c * c, s2 = s * s, cs = c * s;
+    *app = (c2 * a + s2 * e) - 2 * cs * b;
+    *aqq = (s2 * a + c2 * e) + 2 * cs * b;
+    *apq = cs * (a - e) + (c2 - s2) * b;
+    sm_real rp = *arp, rq = *arq;
+    *arp = m * (c * rp - s * rq);
+    *arq = m * (s * rp + c * rq);
+    *arr = (m * m) * *arr;
+    svd_quat_mul_axis(quat, r, c1, sgn * s1);
 }
 
 /* Givens rotation G on rows i, j of B that zeroes B[j][k] and leaves B[i][k] >= 0; U <- U G^T. */
@@ -188,31 +229,58 @@ static inline void svd3_givens(sm_real B[9], sm_real U[9], int i, int j, int k) 
     }
 }
 
-void sm_svd3(const sm_real F[9], sm_real U[9], sm_real sigma[3], sm_real V[9]) {
-    sm_real G[9], W[9], B[9], R[9];
-    sm_real scale = svd_normalize(F, G, 9);
+/* |F_ij| within [SVD_LO, SVD_HI] needs no scaling: the Pade numerators (degree 4 in F) neither
+ * overflow nor lose the relevant bits to underflow. */
+#if SM_DOUBLE
+#define SVD_LO 0x1p-100
+#define SVD_HI 0x1p100
+#else
+#define SVD_LO 0x1p-8f
+#define SVD_HI 0x1p8f
+#endif
 
-    /* A = G^T G, then A = W diag W^T by cyclic Jacobi. */
+void sm_svd3(const sm_real F[9], sm_real U[9], sm_real sigma[3], sm_real V[9]) {
+    sm_real G[9], W[9], R[9];
+    sm_real mx = 0, scale = 1;
+    for (int i = 0; i < 9; i++) mx = SM_MAX(mx, sm_fabs(F[i]));
+    if (mx >= SVD_LO && mx <= SVD_HI) {
+        for (int i = 0; i < 9; i++) G[i] = F[i];
+    } else {
+        scale = svd_normalize(F, G, 9); /* rare: huge, tiny, zero (or NaN) input */
+    }
+
+    /* A = G^T G = W diag W^T by Jacobi sweeps; W from the accumulated quaternion. */
     sm_real a00 = G[0] * G[0] + G[3] * G[3] + G[6] * G[6];
     sm_real a11 = G[1] * G[1] + G[4] * G[4] + G[7] * G[7];
     sm_real a22 = G[2] * G[2] + G[5] * G[5] + G[8] * G[8];
     sm_real a01 = G[0] * G[1] + G[3] * G[4] + G[6] * G[7];
     sm_real a02 = G[0] * G[2] + G[3] * G[5] + G[6] * G[8];
     sm_real a12 = G[1] * G[2] + G[4] * G[5] + G[7] * G[8];
-    for (int i = 0; i < 9; i++) W[i] = (i % 4 == 0) ? SVD_ONE : 0;
+    sm_real quat[4] = {1, 0, 0, 0};
     for (int sweep = 0; sweep < SM_SVD_SWEEPS; sweep++) {
-        svd3_jacobi(&a00, &a11, &a01, &a02, &a12, W, 0, 1);
-        svd3_jacobi(&a00, &a22, &a02, &a01, &a12, W, 0, 2);
-        svd3_jacobi(&a11, &a22, &a12, &a01, &a02, W, 1, 2);
-        /* Once every off-diagonal entry is below the skip threshold of svd_jacobi_t, the remaining
-         * sweeps would apply identity rotations only: stopping changes no bit of the result. MPM's
-         * F^E is close to a rotation, so this usually ends after one or two sweeps. */
-        if (a01 * a01 <= SVD_EPS2 * a00 * a11 && a02 * a02 <= SVD_EPS2 * a00 * a22 && a12 * a12 <= SVD_EPS2 * a11 * a22)
-            break;
+        svd3_rot(&a00, &a11, &a01, &a02, &a12, &a22, quat, 2, -1);
+        svd3_rot(&a00, &a22, &a02, &a01, &a12, &a11, quat, 1, 1);
+        svd3_rot(&a11, &a22, &a12, &a01, &a02, &a00, quat, 0, -1);
+        /* Converged when every off-diagonal entry is below eps times the largest eigenvalue:
+         * then the columns of B = G W are orthogonal to rounding relative to ||G||, which is all
+         * that the QR step below needs (the trailing 2x2 block is finished exactly there). */
+        sm_real lim = SM_MAX(a00, SM_MAX(a11, a22)) * SM_EPS;
+        if (SM_MAX(sm_fabs(a01), SM_MAX(sm_fabs(a02), sm_fabs(a12))) <= lim) break;
     }
+    sm_real qn;
+    {
+        sm_real w = quat[0], x = quat[1], y = quat[2], z = quat[3];
+        sm_real ww = w * w, xx = x * x, yy = y * y, zz = z * z;
+        sm_real xy = x * y, xz = x * z, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+        qn = (ww + xx) + (yy + zz); /* W = qn V */
+        W[0] = (ww + xx) - (yy + zz), W[1] = 2 * (xy - wz), W[2] = 2 * (xz + wy);
+        W[3] = 2 * (xy + wz), W[4] = (ww - xx) + (yy - zz), W[5] = 2 * (yz - wx);
+        W[6] = 2 * (xz - wy), W[7] = 2 * (yz + wx), W[8] = (ww - xx) - (yy - zz);
+    }
+    sm_real iqn = SVD_ONE / qn;
 
-    /* B = G W and its squared column norms. */
-    sm_real n0 = 0, n1 = 0, n2 = 0;
+    /* B = G W (= qn G V) and its squared column norms. */
+    sm_real B[9], n0 = 0, n1 = 0, n2 = 0;
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < 3; j++)
             B[3 * i + j] = G[3 * i] * W[j] + G[3 * i + 1] * W[3 + j] + G[3 * i + 2] * W[6 + j];
@@ -221,8 +289,8 @@ void sm_svd3(const sm_real F[9], sm_real U[9], sm_real sigma[3], sm_real V[9]) {
         n2 += B[3 * i + 2] * B[3 * i + 2];
     }
 
-    /* Column order by decreasing norm: a 3-comparator network on indices (integer selects, no
-     * jumps), then one gather. An odd permutation negates the last column of V and B. */
+    /* Column order by decreasing norm: a 3-comparator network on indices, then one gather. An odd
+     * permutation negates the last column of V and B, so that det V stays +1. */
     int i0 = 0, i1 = 1, i2 = 2, odd = 0, sw, ti;
     sm_real tn;
     sw = n1 > n0, ti = i0, i0 = sw ? i1 : i0, i1 = sw ? ti : i1, odd ^= sw;
@@ -230,40 +298,74 @@ void sm_svd3(const sm_real F[9], sm_real U[9], sm_real sigma[3], sm_real V[9]) {
     sw = n2 > n1, ti = i1, i1 = sw ? i2 : i1, i2 = sw ? ti : i2, odd ^= sw;
     n1 = SM_MAX(n1, n2);
     sw = n1 > n0, ti = i0, i0 = sw ? i1 : i0, i1 = sw ? ti : i1, odd ^= sw;
+    tn = n0, n0 = SM_MAX(n0, n1), n1 = SM_MIN(tn, n1);
     sm_real sg = SVD_ONE - 2 * (sm_real)odd;
     for (int k = 0; k < 3; k++) {
         R[3 * k] = B[3 * k + i0];
         R[3 * k + 1] = B[3 * k + i1];
         R[3 * k + 2] = sg * B[3 * k + i2];
-        V[3 * k] = W[3 * k + i0];
-        V[3 * k + 1] = W[3 * k + i1];
-        V[3 * k + 2] = sg * W[3 * k + i2];
+        V[3 * k] = W[3 * k + i0] * iqn;
+        V[3 * k + 1] = W[3 * k + i1] * iqn;
+        V[3 * k + 2] = sg * W[3 * k + i2] * iqn;
     }
 
-    /* R = Q^T B by Givens rotations; U accumulates Q. R_00, R_11 >= 0. */
-    for (int i = 0; i < 9; i++) U[i] = (i % 4 == 0) ? SVD_ONE : 0;
-    svd3_givens(R, U, 0, 1, 0);
-    svd3_givens(R, U, 0, 2, 0);
-    svd3_givens(R, U, 1, 2, 1);
+    /* QR of the (nearly orthogonal) columns b0, b1, b2 of R: u0 = b0 / |b0|, u2 = b0 x b1 / |.|,
+     * u1 = u2 x u0, so U = [u0 u1 u2] is a rotation and U^T B is upper triangular up to rounding
+     * (u1.b0 = u2.b0 = u2.b1 = 0), with R_00, R_11 > 0 and the sign of det F in R_22. Accurate
+     * while b0 and b1 are far from parallel, which the converged Jacobi guarantees unless
+     * |b1| / |b0| is ~eps or below (rank <= 1): then Givens rotations (zero-safe) instead. */
+    sm_real cx = R[3] * R[7] - R[6] * R[4];
+    sm_real cy = R[6] * R[1] - R[0] * R[7];
+    sm_real cz = R[0] * R[4] - R[3] * R[1];
+    sm_real nc = cx * cx + cy * cy + cz * cz;
+    sm_real r00, r01, r02, r11, r12, r21, r22;
+    if (nc > SVD_HALF * n0 * n1 && n1 > n0 * (SM_EPS * SM_EPS * SM_EPS)) {
+        sm_real i0n = SVD_ONE / sm_sqrt(n0), icn = SVD_ONE / sm_sqrt(nc);
+        sm_real u0[3] = {R[0] * i0n, R[3] * i0n, R[6] * i0n};
+        sm_real u2[3] = {cx * icn, cy * icn, cz * icn};
+        sm_real u1[3] = {u2[1] * u0[2] - u2[2] * u0[1], u2[2] * u0[0] - u2[0] * u0[2],
+                         u2[0] * u0[1] - u2[1] * u0[0]};
+        r00 = n0 * i0n;
+        r01 = u0[0] * R[1] + u0[1] * R[4] + u0[2] * R[7];
+        r02 = u0[0] * R[2] + u0[1] * R[5] + u0[2] * R[8];
+        r11 = u1[0] * R[1] + u1[1] * R[4] + u1[2] * R[7];
+        r12 = u1[0] * R[2] + u1[1] * R[5] + u1[2] * R[8];
+        r21 = u2[0] * R[1] + u2[1] * R[4] + u2[2] * R[7];
+        r22 = u2[0] * R[2] + u2[1] * R[5] + u2[2] * R[8];
+        for (int k = 0; k < 3; k++) U[3 * k] = u0[k], U[3 * k + 1] = u1[k], U[3 * k + 2] = u2[k];
+    } else {
+        for (int i = 0; i < 9; i++) U[i] = (i % 4 == 0) ? SVD_ONE : 0;
+        svd3_givens(R, U, 0, 1, 0);
+        svd3_givens(R, U, 0, 2, 0);
+        svd3_givens(R, U, 1, 2, 1);
+        r00 = R[0], r01 = R[1], r02 = R[2], r11 = R[4], r12 = R[5], r21 = R[7], r22 = R[8];
+    }
+    (void)r01, (void)r02; /* O(eps r00) after convergence: dropped */
 
-    /* Clean-up of the trailing 2x2 block: R[1:3][1:3] = Ub diag(sb) Vb^T. */
-    sm_real Ub[4], Vb[4], sb[2];
-    svd2_core(R[4], R[5], R[7], R[8], Ub, sb, Vb);
-    for (int k = 0; k < 3; k++) {
-        sm_real u1 = U[3 * k + 1], u2 = U[3 * k + 2];
-        U[3 * k + 1] = u1 * Ub[0] + u2 * Ub[2];
-        U[3 * k + 2] = u1 * Ub[1] + u2 * Ub[3];
-        sm_real v1 = V[3 * k + 1], v2 = V[3 * k + 2];
-        V[3 * k + 1] = v1 * Vb[0] + v2 * Vb[2];
-        V[3 * k + 2] = v1 * Vb[1] + v2 * Vb[3];
+    /* Clean-up of the trailing 2x2 block [[r11, r12], [r21, r22]] when it is not diagonal to
+     * rounding relative to r00: r12 ~ A_12 / sigma_1 can be large when sigma_1 and sigma_2 are
+     * both tiny (their vectors are not resolved by the Jacobi sweeps on F^T F). */
+    sm_real s0 = r00, s1, s2;
+    if (sm_fabs(r12) + sm_fabs(r21) > SM_EPS * r00) {
+        sm_real Ub[4], Vb[4], sb[2];
+        svd2_core(r11, r12, r21, r22, Ub, sb, Vb);
+        for (int k = 0; k < 3; k++) {
+            sm_real u1 = U[3 * k + 1], u2 = U[3 * k + 2];
+            U[3 * k + 1] = u1 * Ub[0] + u2 * Ub[2];
+            U[3 * k + 2] = u1 * Ub[1] + u2 * Ub[3];
+            sm_real v1 = V[3 * k + 1], v2 = V[3 * k + 2];
+            V[3 * k + 1] = v1 * Vb[0] + v2 * Vb[2];
+            V[3 * k + 2] = v1 * Vb[1] + v2 * Vb[3];
+        }
+        s1 = sb[0], s2 = sb[1];
+    } else {
+        s1 = r11, s2 = r22;
     }
 
-    /* R_00 >= sb[0] >= |sb[1]| up to rounding: with the Jacobi iteration converged, R_00 < sb[0]
-     * only when sigma_0 ~ sigma_1 to the last bits. Sorting just the values then moves the
-     * reconstruction by |R_00 - sb[0]|, a rounding-level amount, and makes the order exact. */
-    sm_real s0 = R[0], s1 = sb[0];
+    /* Order: s0 >= s1 >= |s2| holds up to rounding; make it exact (an ulp-sized change). */
+    sm_real k = scale * iqn;
     sm_real hi = SM_MAX(s0, s1), mid = SM_MIN(s0, s1);
-    sigma[0] = hi * scale;
-    sigma[1] = mid * scale;
-    sigma[2] = svd_copysign(SM_MIN(sm_fabs(sb[1]), mid), sb[1]) * scale;
+    sigma[0] = hi * k;
+    sigma[1] = mid * k;
+    sigma[2] = svd_copysign(SM_MIN(sm_fabs(s2), mid), s2) * k;
 }

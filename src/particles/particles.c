@@ -12,12 +12,14 @@ static int grow(void **ptr, size_t elem, size_t n) {
 
 sm_status sm_particles_reserve(sm_particles *p, int dim, size_t n) {
     if (n <= p->cap) return SM_OK;
-    size_t cap = p->cap ? p->cap : 1024;
-    while (cap < n) cap *= 2;
+    /* Exactly n when a large batch arrives (seeding); 25% headroom for trickles (emitters). */
+    size_t cap = p->cap + p->cap / 4;
+    if (cap < n) cap = n;
+    if (cap < 1024) cap = 1024;
     size_t d = (size_t)dim, dd = d * d;
     int ok = grow((void **)&p->x, sizeof(sm_real) * d, cap) && grow((void **)&p->v, sizeof(sm_real) * d, cap) &&
              grow((void **)&p->B, sizeof(sm_real) * dd, cap) && grow((void **)&p->F, sizeof(sm_real) * dd, cap) &&
-             grow((void **)&p->tau, sizeof(sm_real) * dd, cap) && grow((void **)&p->mass, sizeof(sm_real), cap) &&
+             grow((void **)&p->tau, sizeof(sm_real) * SM_NTAU(d), cap) &&
              grow((void **)&p->vol0, sizeof(sm_real), cap) && grow((void **)&p->q, sizeof(sm_real), cap) &&
              grow((void **)&p->alpha, sizeof(sm_real), cap) && grow((void **)&p->mat, sizeof(uint16_t), cap);
     if (!ok) return SM_ERR_NOMEM;
@@ -31,7 +33,6 @@ void sm_particles_free(sm_particles *p) {
     free(p->B);
     free(p->F);
     free(p->tau);
-    free(p->mass);
     free(p->vol0);
     free(p->q);
     free(p->alpha);

@@ -23,8 +23,8 @@ run_build() { # name, cmake args...
 run_build double -DSM_DOUBLE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo
 if [ $QUICK -eq 0 ]; then
     run_build float -DSM_DOUBLE=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo
-    run_build clang -DSM_DOUBLE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang
+    run_build clang -DSM_DOUBLE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DSM_SIBLING=OFF
     ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-        run_build asan -DSM_DOUBLE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSM_SANITIZE=ON
+        run_build asan -DSM_DOUBLE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSM_SANITIZE=ON -DSM_SIBLING=OFF
 fi
 echo "scripts/test.sh: all builds passed"

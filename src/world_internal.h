@@ -157,6 +157,9 @@ struct sm_world {
     double last_dt, min_dt, max_dt;
     double stage_seconds[SM_STAGE_COUNT];
     uint64_t clamped;
+    double step_vmax2;      /* largest particle speed^2 after the last G2P */
+    int step_bad;           /* the last step produced a non-finite particle value */
+    int dirty;              /* particles changed outside a step since the last G2P: scan them */
     uint64_t projected;
     sm_implicit_ws imp;
     uint64_t newton_total, gmres_total, newton_unconverged;

@@ -1025,7 +1025,57 @@ static void test_friction(void) {
     }
 }
 
+/* The grid update and the particle projection skip whole blocks whose centre is farther from a
+ * collider than the block's radius (src/integrate/step_dim.c). That is only right if every signed
+ * distance is 1-Lipschitz: |phi(x) - phi(y)| <= |x - y|. Check it on random pairs for every shape
+ * kind, rotated, inside-out, in unions and complemented colliders, near and far from the surface. */
+static void test_lipschitz(void) {
+    unsigned long long seed = 77;
+    double worst = 0;
+    for (int trial = 0; trial < 400; trial++) {
+        sm_collider_def def = sm_collider_def_default();
+        def.shape_count = 1 + trial % 3;
+        for (int k = 0; k < def.shape_count; k++) {
+            sm_shape s = sm_shape_default((sm_shape_kind)((trial + k) % 4));
+            for (int a = 0; a < 3; a++) {
+                s.center[a] = sm_test_uniform(&seed, -0.5, 0.5);
+                s.normal[a] = sm_test_uniform(&seed, -1, 1);
+                s.half_extent[a] = sm_test_uniform(&seed, 0.05, 0.4);
+            }
+            s.radius = sm_test_uniform(&seed, 0.05, 0.4);
+            s.half_height = sm_test_uniform(&seed, 0.05, 0.4);
+            double q[4], qn = 0;
+            for (int a = 0; a < 4; a++) {
+                q[a] = sm_test_uniform(&seed, -1, 1);
+                qn += q[a] * q[a];
+            }
+            for (int a = 0; a < 4; a++) s.rotation[a] = q[a] / sqrt(qn);
+            s.inside_out = (trial / 4) % 2;
+            def.shapes[k] = s;
+        }
+        def.inside_out = (trial / 8) % 2;
+        sm_collider c;
+        sm_collider_init(&c, &def);
+        int dim = 2 + trial % 2;
+        for (int pair = 0; pair < 200; pair++) {
+            double x[3] = {0, 0, 0}, y[3] = {0, 0, 0}, r2 = 0;
+            double span = pair % 2 ? 2.0 : 0.1;
+            for (int a = 0; a < dim; a++) {
+                x[a] = sm_test_uniform(&seed, -1, 1);
+                y[a] = x[a] + sm_test_uniform(&seed, -span, span);
+                r2 += (y[a] - x[a]) * (y[a] - x[a]);
+            }
+            double dphi = fabs(sm_collider_phi(&c, dim, 0, x, NULL) - sm_collider_phi(&c, dim, 0, y, NULL));
+            double ratio = dphi / sqrt(r2);
+            if (ratio > worst) worst = ratio;
+            CHECK(dphi <= sqrt(r2) * (1 + 1e-9) + 1e-12);
+        }
+    }
+    printf("signed distances: worst |dphi|/|dx| = %.6f over random pairs (must be <= 1)\n", worst);
+}
+
 int main(void) {
+    test_lipschitz();
     test_defaults();
     test_sphere_halfspace();
     test_box();

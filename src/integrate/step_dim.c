@@ -517,6 +517,27 @@ static void SM_FN(p2g)(sm_world *w, const sm_step_ctx *c, int with_force) {
 /* ------------------------------------------------------------------------------------------ */
 /* Grid update, collisions, friction                                                            */
 
+/* Centre of grid block `slot` (m) and its half-diagonal. */
+static inline double block_center(const sm_grid *g, const sm_step_ctx *c, size_t slot, double ctr[3]) {
+    int bc[3];
+    sm_block_coords(g->key[slot], bc);
+    ctr[0] = ctr[1] = ctr[2] = 0;
+    for (int a = 0; a < D; a++) ctr[a] = (double)c->lo[a] + ((double)(bc[a] << SM_BLOCK_BITS) + 1.5) * (double)c->dx;
+    return 1.5 * (double)c->dx * sqrt((double)D);
+}
+
+/* 1 if no collider can act on any node of a block with centre ctr and half-diagonal R whose
+ * nodes move at most vmax (m/s) in dt: every collider's signed distance, at both poses, exceeds R
+ * plus the step's travel plus the contact tolerance. Signed distances are 1-Lipschitz
+ * (tests/test_collide.c checks it), so the bound at the centre covers every node. */
+static inline int block_free(const sm_collider *cols, int ncol, const double ctr[3], double R, double reach) {
+    for (int b = 0; b < ncol; b++) {
+        if (!(sm_collider_phi(&cols[b], D, 0, ctr, NULL) > R + reach)) return 0;
+        if (!(sm_collider_phi(&cols[b], D, 1, ctr, NULL) > R + reach)) return 0;
+    }
+    return 1;
+}
+
 static void SM_FN(grid_update)(sm_world *w, const sm_step_ctx *c) {
     sm_grid *g = &w->grid;
     const long nb = (long)g->nactive;
@@ -525,23 +546,37 @@ static void SM_FN(grid_update)(sm_world *w, const sm_step_ctx *c) {
     const sm_collider *cols = w->colliders;
     const int ncol = w->ncolliders + w->nwalls;
     const int static_sticks = w->def.static_friction_sticks;
+    const sm_real dtr = (sm_real)dt;
 #pragma omp parallel for schedule(static) num_threads(c->threads)
     for (long t = 0; t < nb; t++) {
         size_t b = (size_t)t;
+        /* v^n = (mv)/m, v* = v^n + dt (f/m + g) -> f (v-bar) and vt; the largest |v*|. */
+        double vmax2 = 0;
         for (size_t ni = b * bn; ni < (b + 1) * bn; ni++) {
             sm_real m = g->m[ni];
-            if (!(m > 0)) {
-                for (int a = 0; a < D; a++) g->v[ni * D + a] = g->f[ni * D + a] = g->vt[ni * D + a] = 0;
-                continue;
+            sm_real inv_m = m > 0 ? SM_R(1.0) / m : 0;
+            sm_real s2 = 0;
+            for (int a = 0; a < D; a++) {
+                sm_real vn = g->v[ni * D + a] * inv_m;
+                sm_real vs = m > 0 ? vn + dtr * (g->f[ni * D + a] * inv_m + c->gravity[a]) : 0;
+                g->v[ni * D + a] = vn;
+                g->f[ni * D + a] = vs;
+                g->vt[ni * D + a] = vs;
+                s2 += vs * vs;
             }
-            sm_real inv_m = SM_R(1.0) / m;
+            if ((double)s2 > vmax2) vmax2 = (double)s2;
+        }
+        double ctr[3];
+        const double R = block_center(g, c, b, ctr);
+        const double reach = dt * sqrt(vmax2) + 1e-6 * (1.0 + fabs(ctr[0]) + fabs(ctr[1]) + fabs(ctr[2]) + R);
+        if (block_free(cols, ncol, ctr, R, reach)) continue;
+        for (size_t ni = b * bn; ni < (b + 1) * bn; ni++) {
+            if (!(g->m[ni] > 0)) continue;
             double vstar[3] = {0, 0, 0}, v[3] = {0, 0, 0}, xi[3] = {0, 0, 0};
             int ijk[3];
             sm_grid_node_coords(g, ni, ijk);
             for (int a = 0; a < D; a++) {
-                sm_real vn = g->v[ni * D + a] * inv_m;
-                g->v[ni * D + a] = vn;
-                vstar[a] = (double)(vn + (sm_real)dt * (g->f[ni * D + a] * inv_m + c->gravity[a]));
+                vstar[a] = (double)g->f[ni * D + a];
                 v[a] = vstar[a];
                 xi[a] = (double)c->lo[a] + (double)ijk[a] * (double)c->dx;
             }
@@ -606,8 +641,16 @@ static void SM_FN(g2p_gather)(const sm_world *w, const sm_pblock *pb, vec *restr
     }
 }
 
-static inline __attribute__((always_inline)) size_t g2p_one(sm_world *w, const sm_step_ctx *c, int S, size_t p,
-                                                           const int bc[3], const vec *restrict cache) {
+/* Per-block G2P results: positions' bounding box, largest speed, non-finite flag, clamps. */
+typedef struct g2p_acc {
+    sm_real lo[D], hi[D];
+    sm_real vmax2;
+    sm_real nan;        /* 0 * every new value, summed: NaN iff one of them is not finite */
+    size_t clamped;
+} g2p_acc;
+
+static inline __attribute__((always_inline)) void g2p_one(sm_world *w, const sm_step_ctx *c, int S, size_t p,
+                                                         const int bc[3], const vec *restrict cache, g2p_acc *acc) {
     sm_particles *P = &w->p;
     const int transfer = w->def.transfer;
     const sm_real dt = (sm_real)c->dt;
@@ -666,12 +709,14 @@ static inline __attribute__((always_inline)) size_t g2p_one(sm_world *w, const s
         E[2] += W.w[0][s0] * tz;
     }
 #endif
-    if (transfer == SM_TRANSFER_FLIP) {
-        sm_real r = (sm_real)w->def.flip_ratio;
-        for (int a = 0; a < D; a++) P->v[p * D + a] = r * P->v[p * D + a] + Sum[a];
-    } else {
-        for (int a = 0; a < D; a++) P->v[p * D + a] = Sum[a];
+    sm_real s2 = 0, z = 0;
+    for (int a = 0; a < D; a++) {
+        sm_real va = transfer == SM_TRANSFER_FLIP ? (sm_real)w->def.flip_ratio * P->v[p * D + a] + Sum[a] : Sum[a];
+        P->v[p * D + a] = va;
+        s2 += va * va;
+        z += 0 * va;
     }
+    acc->vmax2 = s2 > acc->vmax2 ? s2 : acc->vmax2;
     if (transfer == SM_TRANSFER_APIC)
         for (int a = 0; a < D; a++)
             for (int e = 0; e < D; e++) P->B[p * DD + a * D + e] = E[e][a];
@@ -683,45 +728,65 @@ static inline __attribute__((always_inline)) size_t g2p_one(sm_world *w, const s
             sm_real s = Fo[a * D + e];
             for (int k = 0; k < D; k++) s += dt * E[k][D + a] * Fo[k * D + e];
             F[a * D + e] = s;
+            z += 0 * s;
         }
     /* x = x + dt sum w v-bar (3.116); the safety clamp keeps every stencil inside the grid. */
-    size_t clamped = 0;
     for (int a = 0; a < D; a++) {
         sm_real xa = P->x[p * D + a] + dt * Sum[D + a];
         sm_real lo = c->lo[a] + SM_R(2.0) * c->dx;
         sm_real hi = c->lo[a] + (sm_real)(w->cells[a] - 2) * c->dx;
         if (xa < lo) {
             xa = lo;
-            clamped = 1;
+            acc->clamped++;
         } else if (xa > hi) {
             xa = hi;
-            clamped = 1;
+            acc->clamped++;
         }
+        z += 0 * xa;
         P->x[p * D + a] = xa;
+        acc->lo[a] = xa < acc->lo[a] ? xa : acc->lo[a];
+        acc->hi[a] = xa > acc->hi[a] ? xa : acc->hi[a];
     }
-    /* Safety net: a particle that ends a step inside a collider is put back on its surface along
-     * the gradient (positions only). The grid-level constraints above keep this rare and small;
-     * it is counted in sm_diagnostics.projected_particles. */
-    if (w->def.particle_projection) {
-        for (int b = 0; b < w->ncolliders; b++) {
+    acc->nan += z;
+}
+
+/* Safety net: a particle that ends a step inside a collider is put back on its surface along
+ * the gradient (positions only). The grid-level constraints keep this rare and small; it is
+ * counted in sm_diagnostics.projected_particles. Only colliders that may reach the block's
+ * bounding box (1-Lipschitz signed distance at its centre) are evaluated per particle. */
+static size_t SM_FN(project_block)(sm_world *w, const sm_pblock *pb, const g2p_acc *acc) {
+    sm_particles *P = &w->p;
+    double ctr[3] = {0, 0, 0}, R2 = 0;
+    for (int a = 0; a < D; a++) {
+        ctr[a] = 0.5 * ((double)acc->lo[a] + (double)acc->hi[a]);
+        double h = 0.5 * ((double)acc->hi[a] - (double)acc->lo[a]);
+        R2 += h * h;
+    }
+    const double R = sqrt(R2) + 1e-6 * (1.0 + fabs(ctr[0]) + fabs(ctr[1]) + fabs(ctr[2]));
+    size_t projected = 0;
+    for (int b = 0; b < w->ncolliders; b++) {
+        if (sm_collider_phi(&w->colliders[b], D, 1, ctr, NULL) > R) continue;
+        for (uint32_t idx = pb->start; idx < pb->end; idx++) {
+            const size_t p = w->perm[idx];
             double xp[3] = {0, 0, 0}, gr[3];
             for (int a = 0; a < D; a++) xp[a] = (double)P->x[p * D + a];
             double phi = sm_collider_phi(&w->colliders[b], D, 1, xp, gr);
             if (phi < 0) {
                 for (int a = 0; a < D; a++) P->x[p * D + a] = (sm_real)(xp[a] - phi * gr[a]);
-                clamped |= 2;
+                projected++;
             }
         }
     }
-    return clamped;
+    return projected;
 }
 
 static void SM_FN(g2p)(sm_world *w, const sm_step_ctx *c) {
     const int S = stencil_size(w);
     const long nb = (long)w->npb;
     vec *caches = (vec *)w->cache;
-    unsigned long long clamped = 0, projected = 0;
-#pragma omp parallel num_threads(c->threads) reduction(+ : clamped, projected)
+    unsigned long long clamped = 0, projected = 0, bad = 0;
+    double vmax2 = 0;
+#pragma omp parallel num_threads(c->threads) reduction(+ : clamped, projected, bad) reduction(max : vmax2)
     {
 #ifdef _OPENMP
         vec *cache = caches + (size_t)omp_get_thread_num() * NCACHE;
@@ -734,17 +799,30 @@ static void SM_FN(g2p)(sm_world *w, const sm_step_ctx *c) {
             int bc[3];
             pblock_origin(pb, bc);
             SM_FN(g2p_gather)(w, pb, cache);
-            for (uint32_t idx = pb->start; idx < pb->end; idx++) {
-                size_t r = S == 3 ? g2p_one(w, c, 3, w->perm[idx], bc, cache) : g2p_one(w, c, 4, w->perm[idx], bc, cache);
-                clamped += r & 1;
-                projected += r >> 1;
+            g2p_acc acc;
+            for (int a = 0; a < D; a++) {
+                acc.lo[a] = (sm_real)INFINITY;
+                acc.hi[a] = -(sm_real)INFINITY;
             }
+            acc.vmax2 = acc.nan = 0;
+            acc.clamped = 0;
+            for (uint32_t idx = pb->start; idx < pb->end; idx++) {
+                if (S == 3) g2p_one(w, c, 3, w->perm[idx], bc, cache, &acc);
+                else g2p_one(w, c, 4, w->perm[idx], bc, cache, &acc);
+            }
+            clamped += acc.clamped;
+            if (acc.nan != 0 || acc.nan != acc.nan) bad++;
+            else if (w->def.particle_projection && w->ncolliders > 0) projected += SM_FN(project_block)(w, pb, &acc);
+            if ((double)acc.vmax2 > vmax2) vmax2 = (double)acc.vmax2;
         }
     }
     w->clamped += clamped;
     w->projected += projected;
+    w->step_vmax2 = vmax2;
+    w->step_bad = bad > 0;
 }
 
+/* ------------------------------------------------------------------------------------------ */
 /* Plasticity, hardening, stress                                                                */
 
 static inline void svd_d(const sm_real *F, sm_real *U, sm_real *s, sm_real *V) {
@@ -777,9 +855,11 @@ static void SM_FN(plasticity)(sm_world *w, const sm_step_ctx *c, size_t first) {
     const int nt = c ? c->threads : 1;
     enum { L = SM_PLASTIC_LANES };
     const long nbatch = (long)((n - first + L - 1) / L);
-#pragma omp parallel num_threads(nt)
+    int bad = 0;
+#pragma omp parallel num_threads(nt) reduction(| : bad)
     {
         sm_plastic_lanes b;
+        sm_real z = 0; /* 0 * every output: NaN iff one is not finite */
 #pragma omp for schedule(static)
         for (long t = 0; t < nbatch; t++) {
             const size_t p0 = first + (size_t)t * L;
@@ -817,13 +897,21 @@ static void SM_FN(plasticity)(sm_world *w, const sm_step_ctx *c, size_t first) {
 #endif
             for (int l = 0; l < cnt; l++) {
                 const size_t p = p0 + (size_t)l;
-                for (int k = 0; k < DD; k++) P->F[p * DD + k] = b.F[k][l];
+                for (int k = 0; k < DD; k++) {
+                    P->F[p * DD + k] = b.F[k][l];
+                    z += 0 * b.F[k][l];
+                }
                 P->alpha[p] = b.alpha[l];
                 P->q[p] = b.q[l];
-                for (int k = 0; k < SM_NTAU(D); k++) P->tau[p * SM_NTAU(D) + k] = b.tau[ta[k]][l];
+                for (int k = 0; k < SM_NTAU(D); k++) {
+                    P->tau[p * SM_NTAU(D) + k] = b.tau[ta[k]][l];
+                    z += 0 * b.tau[ta[k]][l];
+                }
             }
         }
+        bad |= (z != 0 || z != z);
     }
+    if (bad) w->step_bad = 1;
 }
 
 static double SM_FN(elastic_energy)(const sm_world *w) {

@@ -463,7 +463,8 @@ INL int lane_project(int d, const sm_real *s, sm_real *alpha, sm_real *q, sm_rea
         sm_real tf = t * (sn[i] / FLOOR); /* computed unconditionally: selects only */
         tau[i] = sn[i] < FLOOR ? tf : t;
     }
-    sm_real dq = case2 ? sm_sqrt(ne) : case3 ? dgamma : 0;
+    sm_real nrm = sm_sqrt(ne); /* unconditional: a select, not a branch */
+    sm_real dq = case2 ? nrm : case3 ? dgamma : 0;
     int harden = (hardening != 0) & (case1 == 0) & (dq > 0);
     sm_real qn = *q + dq;
     sm_real phi = h0 + (h1 * qn - h3) * lane_exp(-h2 * qn);

@@ -223,10 +223,6 @@ size_t sm_world_memory_bytes(const sm_world *w) {
     b += ws->ncap * sizeof(sm_real) * (1 + 6 * d) + (size_t)ws->kcap * ws->ncap * d * sizeof(sm_real);
     b += ws->ncap * sizeof(sm_node_contact) + ws->pcap * (sizeof(sm_implicit_particle) + dd * sizeof(sm_real));
     b += ws->partial_cap * sizeof(double);
-    if (getenv("SM_MEMDEBUG"))
-        fprintf(stderr, "n %zu cap %zu perm %zu grid %zu (cap %zu blocks, active %zu, hash %zu) pb %zu pbh %zu scratch %zu sortk %zu cache %zu\n",
-                P->n, P->cap, w->perm_cap, sm_grid_bytes(&w->grid), w->grid.cap, w->grid.nactive, w->grid.hash.cap, w->pb_cap,
-                w->pb_hash.cap, w->pb_scratch_cap, w->sort_keys_cap, w->cache_cap);
     return b;
 }
 

@@ -833,18 +833,6 @@ static inline void svd_d(const sm_real *F, sm_real *U, sm_real *s, sm_real *V) {
 #endif
 }
 
-/* Symmetric tau = U diag(t) U^T, stored as SM_NTAU(D) values (world_internal.h). */
-static inline void store_tau(sm_real *T, const sm_real *U, const sm_real *t) {
-    static const int ia[6] = {0, 1, 2, 0, 0, 1}, ie[6] = {0, 1, 2, 1, 2, 2};
-    static const int ia2[3] = {0, 1, 0}, ie2[3] = {0, 1, 1};
-    for (int k = 0; k < SM_NTAU(D); k++) {
-        const int a = D == 3 ? ia[k] : ia2[k], e = D == 3 ? ie[k] : ie2[k];
-        sm_real acc = 0;
-        for (int j = 0; j < D; j++) acc += U[a * D + j] * t[j] * U[e * D + j];
-        T[k] = acc;
-    }
-}
-
 /* Algorithm 2 in batches of SM_PLASTIC_LANES consecutive particles (material/plastic_batch.h):
  * every particle goes through the same lane-wise operations whatever its batch, so the result
  * does not depend on the thread count. */

@@ -118,6 +118,17 @@ static inline size_t stencil_node(const sm_pblock *pb, const weights *W, const i
 #define STENCIL_END }
 #endif
 
+/* Cache entry of node l (block-local index, grid.h) of the particle block's grid block cb. */
+static inline int cache_index(int cb, int l) {
+    const int ci = (cb >> (D - 1)) & 1, cj = (cb >> (D - 2)) & 1;
+#if D == 2
+    return (4 * ci + (l >> 2)) * SM_CACHE_SIDE + 4 * cj + (l & 3);
+#else
+    const int ck = cb & 1;
+    return ((4 * ci + (l >> 4)) * SM_CACHE_SIDE + 4 * cj + ((l >> 2) & 3)) * SM_CACHE_SIDE + 4 * ck + (l & 3);
+#endif
+}
+
 /* First node (per axis) of a particle block. */
 static inline void pblock_origin(const sm_pblock *pb, int bc[3]) {
     sm_block_coords(pb->key, bc);
@@ -143,9 +154,6 @@ static int cmp_u64(const void *a, const void *b) {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
     return (x > y) - (x < y);
 }
-
-/* Key-ordered (key, index) pairs are stored as two uint64 each. */
-static int cmp_pair(const void *a, const void *b) { return cmp_u64(a, b); }
 
 static sm_status grow(void **ptr, size_t *cap, size_t need, size_t elem) {
     if (need <= *cap) return SM_OK;
@@ -279,7 +287,7 @@ static sm_status SM_FN(sort)(sm_world *w, const sm_step_ctx *c) {
         }
         rank[b] = SM_NO_SLOT;
     }
-    qsort(pairs, nne, 2 * sizeof(uint64_t), cmp_pair);
+    qsort(pairs, nne, 2 * sizeof(uint64_t), cmp_u64); /* (key, index) pairs, by key */
     /* Per-thread cursors: cnt becomes the first position of thread t's particles of block b. */
     uint32_t pos = 0;
     for (size_t r = 0; r < nne; r++) {
@@ -469,18 +477,8 @@ static inline __attribute__((always_inline)) void p2g_block(sm_world *w, const s
     for (int cb = 0; cb < NGB; cb++) {
         const uint32_t slot = pb->gslot[cb];
         if (slot == SM_NO_SLOT) continue;
-        const int ci = (cb >> (D - 1)) & 1, cj = (cb >> (D - 2)) & 1;
-#if D == 3
-        const int ck = cb & 1;
-#endif
         for (int l = 0; l < BN; l++) {
-#if D == 2
-            const int li = l >> 2, lj = l & 3;
-            const vec q = cache[(4 * ci + li) * SM_CACHE_SIDE + 4 * cj + lj];
-#else
-            const int li = l >> 4, lj = (l >> 2) & 3, lk = l & 3;
-            const vec q = cache[((4 * ci + li) * SM_CACHE_SIDE + 4 * cj + lj) * SM_CACHE_SIDE + 4 * ck + lk];
-#endif
+            const vec q = cache[cache_index(cb, l)];
             const size_t ni = (size_t)slot * BN + (size_t)l;
             g->m[ni] += q[0];
             for (int a = 0; a < D; a++) {
@@ -616,18 +614,8 @@ static void SM_FN(g2p_gather)(const sm_world *w, const sm_pblock *pb, vec *restr
     const sm_real r = (sm_real)w->def.flip_ratio;
     for (int cb = 0; cb < NGB; cb++) {
         const uint32_t slot = pb->gslot[cb];
-        const int ci = (cb >> (D - 1)) & 1, cj = (cb >> (D - 2)) & 1;
-#if D == 3
-        const int ck = cb & 1;
-#endif
         for (int l = 0; l < BN; l++) {
-#if D == 2
-            const int li = l >> 2, lj = l & 3;
-            vec *q = &cache[(4 * ci + li) * SM_CACHE_SIDE + 4 * cj + lj];
-#else
-            const int li = l >> 4, lj = (l >> 2) & 3, lk = l & 3;
-            vec *q = &cache[((4 * ci + li) * SM_CACHE_SIDE + 4 * cj + lj) * SM_CACHE_SIDE + 4 * ck + lk];
-#endif
+            vec *q = &cache[cache_index(cb, l)];
             vec val = {0};
             if (slot != SM_NO_SLOT) {
                 const size_t ni = (size_t)slot * BN + (size_t)l;

@@ -449,9 +449,10 @@ INL int lane_project(int d, const sm_real *s, sm_real *alpha, sm_real *q, sm_rea
     int case3 = (case1 == 0) & (case2 == 0);
     sm_real sc = -kappa / (ndev > 0 ? ndev : ONE);
     for (int i = 0; i < d; i++) H[i] = mean + sc * dev[i];
-    sm_real tr2 = 0, e2[3];
+    sm_real tr2 = 0, e2[3], ex_[3];
     for (int i = 0; i < d; i++) {
         sm_real ex = lane_exp(H[i]);
+        ex_[i] = ex;
         sn[i] = case1 ? s[i] : case2 ? ONE : ex;
         /* eps of the result: log(max(sn, floor)) without a second log (rounding-level change) */
         sm_real lh = ex < FLOOR ? SM_R(-9.21034037197618273607) : H[i];
@@ -461,11 +462,14 @@ INL int lane_project(int d, const sm_real *s, sm_real *alpha, sm_real *q, sm_rea
     for (int i = 0; i < d; i++) {
         sm_real t = 2 * mu * e2[i] + lambda * tr2;
         sm_real tf = t * (sn[i] / FLOOR); /* computed unconditionally: selects only */
-        tau[i] = sn[i] < FLOOR ? tf : t;
+        /* sn < FLOOR, case by case: a comparison of a select would become a select of masks,
+         * which gcc 12 cannot vectorise with AVX-512 mask registers */
+        int small = (case1 & (s[i] < FLOOR)) | (case3 & (ex_[i] < FLOOR));
+        tau[i] = small ? tf : t;
     }
     sm_real nrm = sm_sqrt(ne); /* unconditional: a select, not a branch */
     sm_real dq = case2 ? nrm : case3 ? dgamma : 0;
-    int harden = (hardening != 0) & (case1 == 0) & (dq > 0);
+    int harden = (hardening != 0) & ((case2 & (nrm > 0)) | (case3 & (dgamma > 0)));
     sm_real qn = *q + dq;
     sm_real phi = h0 + (h1 * qn - h3) * lane_exp(-h2 * qn);
     sm_real sp = lane_sin(phi);

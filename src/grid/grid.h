@@ -45,8 +45,11 @@ sm_status sm_block_hash_reserve(sm_block_hash *h, size_t n);
 void sm_block_hash_clear(sm_block_hash *h);
 void sm_block_hash_free(sm_block_hash *h);
 
+/* Fibonacci hashing, folded: the product's high half depends on every coordinate (its low bits
+ * see only the low key bits, which are all zero in 2D). */
 static inline size_t sm_block_hash_pos(const sm_block_hash *h, uint64_t key) {
-    return (size_t)((key * 0x9E3779B97F4A7C15ULL) >> 20) & (h->cap - 1);
+    uint64_t x = key * 0x9E3779B97F4A7C15ULL;
+    return (size_t)(x ^ (x >> 32)) & (h->cap - 1);
 }
 
 /* Value stored for key, or SM_NO_SLOT. */

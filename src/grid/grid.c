@@ -65,10 +65,14 @@ sm_status sm_grid_reserve(sm_grid *g, size_t nblocks) {
     uint64_t *k = sm_realloc(g->key, cap * sizeof *k);
     if (!k) return SM_ERR_NOMEM;
     g->key = k;
+    /* Node arrays: contents are not kept (the grid is zeroed after every reserve). 64-byte
+     * aligned so that a block's nodes start a cache line: threads writing neighbouring blocks
+     * then never share a line. */
     sm_real **arr[4] = {&g->m, &g->v, &g->f, &g->vt};
     for (int i = 0; i < (g->separate_vt ? 4 : 3); i++) {
-        sm_real *q = sm_realloc(*arr[i], nn * (i == 0 ? 1 : d) * sizeof(sm_real));
+        sm_real *q = sm_aligned_alloc(64, nn * (i == 0 ? 1 : d) * sizeof(sm_real));
         if (!q) return SM_ERR_NOMEM;
+        free(*arr[i]);
         *arr[i] = q;
     }
     if (!g->separate_vt) g->vt = g->v;

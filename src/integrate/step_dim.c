@@ -81,6 +81,92 @@ static inline __attribute__((always_inline)) void kernel_weights(int S, const sm
     }
 }
 
+/* Weights of up to WCH consecutive particles of a block (idx i0 .. i0+cnt-1 of perm), computed
+ * together in loops over the particles that the compiler vectorises (structure of arrays). The
+ * same operations as kernel_weights, except that the stencil base is found by truncation: every
+ * particle lies at least 2 cells inside the domain (sm_world_add_particles checks it, G2P clamps),
+ * so X >= 2 and truncation equals floor. Lanes past cnt repeat particle i0 (ignored). */
+#define WCH 16
+typedef struct wchunk {
+    int lb[D][WCH];
+    sm_real w[D][4][WCH], dw[D][4][WCH], dp[D][4][WCH];
+} wchunk;
+
+static inline __attribute__((always_inline)) void chunk_weights(int S, const sm_real *restrict x, size_t n, int overread,
+                                                                const uint32_t *restrict perm, uint32_t i0, int cnt,
+                                                                const sm_step_ctx *c, const int bc[3],
+                                                                wchunk *restrict wc) {
+    /* Positions: read in place when the chunk's particles are consecutive in storage (the usual
+     * case: a block's indices increase, so equal span and count mean consecutive) and WCH of them
+     * exist from the first; else copied (lanes past cnt: the first particle). No gathers: they are
+     * slow here. A partial chunk reads past its particles only with `overread` (P2G: nobody writes
+     * positions then; G2P moves other blocks' particles concurrently). */
+    const sm_real *xb;
+    sm_real xl[WCH * D];
+    const uint32_t q0 = perm[i0];
+    if (perm[i0 + (uint32_t)cnt - 1] - q0 == (uint32_t)(cnt - 1) && (size_t)q0 + WCH <= n && (overread || cnt == WCH)) {
+        xb = x + (size_t)q0 * D;
+    } else {
+        for (int j = 0; j < WCH; j++) {
+            const uint32_t q = perm[i0 + (uint32_t)(j < cnt ? j : 0)];
+            for (int a = 0; a < D; a++) xl[j * D + a] = x[(size_t)q * D + a];
+        }
+        xb = xl;
+    }
+    for (int a = 0; a < D; a++) {
+        const sm_real lo = c->lo[a], inv = c->inv_dx, dx = c->dx;
+        const int org = bc[a] << SM_BLOCK_BITS;
+        for (int j = 0; j < WCH; j++) {
+            const sm_real X = (xb[j * D + a] - lo) * inv;
+            sm_real w4[4], d4[4];
+            int b;
+            if (S == 3) {
+                b = (int)(X - SM_R(0.5));
+                sm_real fx = X - (sm_real)b;
+                sm_real t0 = SM_R(1.5) - fx, t1 = fx - SM_R(1.0), t2 = fx - SM_R(0.5);
+                w4[0] = SM_R(0.5) * t0 * t0;
+                w4[1] = SM_R(0.75) - t1 * t1;
+                w4[2] = SM_R(0.5) * t2 * t2;
+                w4[3] = 0;
+                d4[0] = -t0;
+                d4[1] = SM_R(-2.0) * t1;
+                d4[2] = t2;
+                d4[3] = 0;
+            } else {
+                b = (int)X - 1;
+                sm_real fx = X - (sm_real)b;
+                sm_real r1 = fx - SM_R(1.0), r2 = SM_R(2.0) - fx;
+                sm_real u0 = SM_R(2.0) - fx, u3 = fx - SM_R(1.0);
+                w4[0] = u0 * u0 * u0 / SM_R(6.0);
+                w4[1] = SM_R(0.5) * r1 * r1 * r1 - r1 * r1 + SM_R(2.0) / SM_R(3.0);
+                w4[2] = SM_R(0.5) * r2 * r2 * r2 - r2 * r2 + SM_R(2.0) / SM_R(3.0);
+                w4[3] = u3 * u3 * u3 / SM_R(6.0);
+                d4[0] = SM_R(-0.5) * u0 * u0;
+                d4[1] = SM_R(1.5) * r1 * r1 - SM_R(2.0) * r1;
+                d4[2] = -(SM_R(1.5) * r2 * r2 - SM_R(2.0) * r2);
+                d4[3] = SM_R(0.5) * u3 * u3;
+            }
+            wc->lb[a][j] = b - org;
+            for (int k = 0; k < 4; k++) {
+                wc->w[a][k][j] = w4[k];
+                wc->dw[a][k][j] = d4[k] * inv;
+                wc->dp[a][k][j] = ((sm_real)(b + k) - X) * dx;
+            }
+        }
+    }
+}
+
+static inline __attribute__((always_inline)) void chunk_get(const wchunk *wc, int j, weights *W) {
+    for (int a = 0; a < D; a++) {
+        W->lb[a] = wc->lb[a][j];
+        for (int k = 0; k < 4; k++) {
+            W->w[a][k] = wc->w[a][k][j];
+            W->dw[a][k] = wc->dw[a][k][j];
+            W->dp[a][k] = wc->dp[a][k][j];
+        }
+    }
+}
+
 static inline int stencil_size(const sm_world *w) { return w->def.kernel == SM_KERNEL_CUBIC ? 4 : 3; }
 
 /* Grid node index of stencil node s (per axis) of a particle of block pb. */
@@ -411,10 +497,13 @@ static inline __attribute__((always_inline)) void p2g_block(sm_world *w, const s
     int bc[3];
     pblock_origin(pb, bc);
     memset(cache, 0, NCACHE * sizeof(vec));
+    wchunk wc;
     for (uint32_t idx = pb->start; idx < pb->end; idx++) {
         const size_t p = w->perm[idx];
+        const int j = (int)((idx - pb->start) % WCH);
+        if (j == 0) chunk_weights(S, P->x, P->n, 1, w->perm, idx, (int)(pb->end - idx), c, bc, &wc);
         weights W;
-        kernel_weights(S, P->x + p * D, c, bc, &W);
+        chunk_get(&wc, j, &W);
         const sm_real mp = sm_particle_mass(w->mats, P, p);
         const sm_real *vp = P->v + p * D;
         sm_real mC[DD], Vt[DD];
@@ -502,10 +591,10 @@ static void SM_FN(p2g)(sm_world *w, const sm_step_ctx *c, int with_force) {
             vec *cache = caches;
 #endif
             if (S == 3) {
-#pragma omp for schedule(dynamic, 1)
+#pragma omp for schedule(static)
                 for (long t = first; t < last; t++) p2g_block(w, c, 3, with_force, w->color_blocks[t], cache);
             } else {
-#pragma omp for schedule(dynamic, 1)
+#pragma omp for schedule(static)
                 for (long t = first; t < last; t++) p2g_block(w, c, 4, with_force, w->color_blocks[t], cache);
             }
         }
@@ -638,12 +727,12 @@ typedef struct g2p_acc {
 } g2p_acc;
 
 static inline __attribute__((always_inline)) void g2p_one(sm_world *w, const sm_step_ctx *c, int S, size_t p,
-                                                         const int bc[3], const vec *restrict cache, g2p_acc *acc) {
+                                                         const weights *restrict Wp, const vec *restrict cache,
+                                                         g2p_acc *acc) {
     sm_particles *P = &w->p;
     const int transfer = w->def.transfer;
     const sm_real dt = (sm_real)c->dt;
-    weights W;
-    kernel_weights(S, P->x + p * D, c, bc, &W);
+    const weights W = *Wp;
     /* K_e[s] = (w dp, ..., dw, ...): lanes 0..d-1 weight v-tilde by w dp (B), lanes d..2d-1 weight
      * v-bar by dw (velocity gradient). */
     vec K[D][4];
@@ -781,7 +870,7 @@ static void SM_FN(g2p)(sm_world *w, const sm_step_ctx *c) {
 #else
         vec *cache = caches;
 #endif
-#pragma omp for schedule(dynamic, 1)
+#pragma omp for schedule(static)
         for (long b = 0; b < nb; b++) {
             const sm_pblock *pb = &w->pb[b];
             int bc[3];
@@ -794,9 +883,19 @@ static void SM_FN(g2p)(sm_world *w, const sm_step_ctx *c) {
             }
             acc.vmax2 = acc.nan = 0;
             acc.clamped = 0;
+            wchunk wc;
             for (uint32_t idx = pb->start; idx < pb->end; idx++) {
-                if (S == 3) g2p_one(w, c, 3, w->perm[idx], bc, cache, &acc);
-                else g2p_one(w, c, 4, w->perm[idx], bc, cache, &acc);
+                const int j = (int)((idx - pb->start) % WCH);
+                weights W;
+                if (S == 3) {
+                    if (j == 0) chunk_weights(3, w->p.x, w->p.n, 0, w->perm, idx, (int)(pb->end - idx), c, bc, &wc);
+                    chunk_get(&wc, j, &W);
+                    g2p_one(w, c, 3, w->perm[idx], &W, cache, &acc);
+                } else {
+                    if (j == 0) chunk_weights(4, w->p.x, w->p.n, 0, w->perm, idx, (int)(pb->end - idx), c, bc, &wc);
+                    chunk_get(&wc, j, &W);
+                    g2p_one(w, c, 4, w->perm[idx], &W, cache, &acc);
+                }
             }
             clamped += acc.clamped;
             if (acc.nan != 0 || acc.nan != acc.nan) bad++;
@@ -835,33 +934,42 @@ static void SM_FN(plasticity)(sm_world *w, const sm_step_ctx *c, size_t first) {
 #pragma omp parallel num_threads(nt) reduction(| : bad)
     {
         sm_plastic_lanes b;
+        int lane_mat[L]; /* material whose parameters lane l holds (-1: padding) */
+        for (int l = 0; l < L; l++) lane_mat[l] = -2;
         sm_real z = 0; /* 0 * every output: NaN iff one is not finite */
 #pragma omp for schedule(static)
         for (long t = 0; t < nbatch; t++) {
             const size_t p0 = first + (size_t)t * L;
             const int cnt = (int)(n - p0 < (size_t)L ? n - p0 : (size_t)L);
             for (int l = 0; l < L; l++) {
-                if (l < cnt) {
-                    const size_t p = p0 + (size_t)l;
-                    const sm_material_rt *m = &mats[P->mat[p]];
+                const size_t p = p0 + (size_t)l;
+                const int mi = l < cnt ? (int)P->mat[p] : -1;
+                if (mi != lane_mat[l]) { /* the lanes keep their parameters between batches */
+                    lane_mat[l] = mi;
+                    if (mi >= 0) {
+                        const sm_material_rt *m = &mats[mi];
+                        b.mu[l] = m->mu;
+                        b.lambda[l] = m->lambda;
+                        b.h0[l] = (sm_real)m->h0;
+                        b.h1[l] = (sm_real)m->h1;
+                        b.h2[l] = (sm_real)m->h2;
+                        b.h3[l] = (sm_real)m->h3;
+                        b.plastic[l] = m->plastic;
+                        b.hardening[l] = m->hardening;
+                    } else { /* padding: an undeformed elastic particle */
+                        b.mu[l] = 1;
+                        b.lambda[l] = 0;
+                        b.h0[l] = b.h1[l] = b.h2[l] = b.h3[l] = 0;
+                        b.plastic[l] = b.hardening[l] = 0;
+                    }
+                }
+                if (mi >= 0) {
                     for (int k = 0; k < DD; k++) b.F[k][l] = P->F[p * DD + k];
                     b.alpha[l] = P->alpha[p];
                     b.q[l] = P->q[p];
-                    b.mu[l] = m->mu;
-                    b.lambda[l] = m->lambda;
-                    b.h0[l] = (sm_real)m->h0;
-                    b.h1[l] = (sm_real)m->h1;
-                    b.h2[l] = (sm_real)m->h2;
-                    b.h3[l] = (sm_real)m->h3;
-                    b.plastic[l] = m->plastic;
-                    b.hardening[l] = m->hardening;
-                } else { /* padding: an undeformed elastic particle */
+                } else {
                     for (int k = 0; k < DD; k++) b.F[k][l] = (k % (D + 1) == 0) ? 1 : 0;
                     b.alpha[l] = b.q[l] = 0;
-                    b.mu[l] = 1;
-                    b.lambda[l] = 0;
-                    b.h0[l] = b.h1[l] = b.h2[l] = b.h3[l] = 0;
-                    b.plastic[l] = b.hardening[l] = 0;
                 }
             }
 #if D == 2

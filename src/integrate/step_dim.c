@@ -578,25 +578,60 @@ static inline __attribute__((always_inline)) void p2g_block(sm_world *w, const s
     }
 }
 
+/* Blocks first..last-1 of `list` (NULL: block indices first..last-1) in T contiguous ranges of
+ * about equal particle counts; range t is [*lo, *hi). P2G, G2P and plasticity all split the
+ * particles this way (blocks and storage are both in key order), so a thread works on the same
+ * particles in every stage: with dynamic scheduling, the cross-core traffic halved the 2-thread
+ * speed whenever the two cores did not share a cache. */
+static void block_range(const sm_world *w, const uint32_t *list, long first, long last, int T, int t, long *lo,
+                        long *hi) {
+    size_t total = 0;
+    for (long i = first; i < last; i++) {
+        const sm_pblock *pb = &w->pb[list ? list[i] : (uint32_t)i];
+        total += pb->end - pb->start;
+    }
+    /* s_k = first block i with (particles in first..i-1) >= total k / T; s_T = last. */
+    const size_t want0 = total * (size_t)t / (size_t)T, want1 = total * (size_t)(t + 1) / (size_t)T;
+    size_t cum = 0;
+    long i = first;
+    while (i < last && cum < want0) {
+        const sm_pblock *pb = &w->pb[list ? list[i] : (uint32_t)i];
+        cum += pb->end - pb->start;
+        i++;
+    }
+    *lo = i;
+    if (t == T - 1) {
+        *hi = last;
+        return;
+    }
+    while (i < last && cum < want1) {
+        const sm_pblock *pb = &w->pb[list ? list[i] : (uint32_t)i];
+        cum += pb->end - pb->start;
+        i++;
+    }
+    *hi = i;
+}
+
 static void SM_FN(p2g)(sm_world *w, const sm_step_ctx *c, int with_force) {
     const int S = stencil_size(w);
     vec *caches = (vec *)w->cache;
-    for (int col = 0; col < NCOLORS; col++) {
-        const long first = (long)w->color_offset[col], last = (long)w->color_offset[col + 1];
 #pragma omp parallel num_threads(c->threads)
-        {
+    {
 #ifdef _OPENMP
-            vec *cache = caches + (size_t)omp_get_thread_num() * NCACHE;
+        const int t = omp_get_thread_num(), T = omp_get_num_threads();
 #else
-            vec *cache = caches;
+        const int t = 0, T = 1;
 #endif
-            if (S == 3) {
-#pragma omp for schedule(static)
-                for (long t = first; t < last; t++) p2g_block(w, c, 3, with_force, w->color_blocks[t], cache);
-            } else {
-#pragma omp for schedule(static)
-                for (long t = first; t < last; t++) p2g_block(w, c, 4, with_force, w->color_blocks[t], cache);
-            }
+        vec *cache = caches + (size_t)t * NCACHE;
+        for (int col = 0; col < NCOLORS; col++) {
+            long lo, hi;
+            block_range(w, w->color_blocks, (long)w->color_offset[col], (long)w->color_offset[col + 1], T, t, &lo,
+                        &hi);
+            if (S == 3)
+                for (long k = lo; k < hi; k++) p2g_block(w, c, 3, with_force, w->color_blocks[k], cache);
+            else
+                for (long k = lo; k < hi; k++) p2g_block(w, c, 4, with_force, w->color_blocks[k], cache);
+#pragma omp barrier
         }
     }
 }
@@ -866,12 +901,14 @@ static void SM_FN(g2p)(sm_world *w, const sm_step_ctx *c) {
 #pragma omp parallel num_threads(c->threads) reduction(+ : clamped, projected, bad) reduction(max : vmax2)
     {
 #ifdef _OPENMP
-        vec *cache = caches + (size_t)omp_get_thread_num() * NCACHE;
+        const int t = omp_get_thread_num(), T = omp_get_num_threads();
 #else
-        vec *cache = caches;
+        const int t = 0, T = 1;
 #endif
-#pragma omp for schedule(static)
-        for (long b = 0; b < nb; b++) {
+        vec *cache = caches + (size_t)t * NCACHE;
+        long blo, bhi;
+        block_range(w, NULL, 0, nb, T, t, &blo, &bhi);
+        for (long b = blo; b < bhi; b++) {
             const sm_pblock *pb = &w->pb[b];
             int bc[3];
             pblock_origin(pb, bc);

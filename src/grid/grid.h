@@ -45,13 +45,12 @@ sm_status sm_block_hash_reserve(sm_block_hash *h, size_t n);
 void sm_block_hash_clear(sm_block_hash *h);
 void sm_block_hash_free(sm_block_hash *h);
 
-/* Fibonacci hashing, folded: the product's high half depends on every coordinate (its low bits
- * see only the low key bits, which are all zero in 2D). */
+/* Fibonacci hashing: the top log2(cap) bits of key * 2^64 / golden ratio. Every key bit reaches
+ * the top of the product (low product bits see only low key bits, which are all zero in 2D), and
+ * arithmetic progressions of keys -- rows of blocks -- spread evenly. cap >= 2 (a power of two). */
 static inline size_t sm_block_hash_pos(const sm_block_hash *h, uint64_t key) {
-    uint64_t x = key * 0x9E3779B97F4A7C15ULL;
-    return (size_t)(x ^ (x >> 32)) & (h->cap - 1);
+    return (size_t)((key * 0x9E3779B97F4A7C15ULL) >> (64 - __builtin_ctzll((unsigned long long)h->cap)));
 }
-
 /* Value stored for key, or SM_NO_SLOT. */
 static inline uint32_t sm_block_hash_find(const sm_block_hash *h, uint64_t key) {
     if (!h->cap) return SM_NO_SLOT;

@@ -218,7 +218,7 @@ size_t sm_world_memory_bytes(const sm_world *w) {
     b += w->pb_scratch_cap * sizeof(uint32_t) + w->sort_keys_cap * sizeof(uint64_t) + w->color_cap * sizeof(uint32_t);
     b += w->cache_cap * sizeof(sm_real);
     b += (size_t)w->mats_cap * sizeof(sm_material_rt) + (size_t)w->colliders_cap * sizeof(sm_collider);
-    b += (size_t)w->emitters_cap * sizeof(sm_emitter);
+    b += (size_t)w->emitters_cap * sizeof(sm_emitter) + w->emit_cap * 6 * sizeof(double);
     const sm_implicit_ws *ws = &w->imp;
     b += ws->ncap * sizeof(sm_real) * (1 + 6 * d) + (size_t)ws->kcap * ws->ncap * d * sizeof(sm_real);
     b += ws->ncap * sizeof(sm_node_contact) + ws->pcap * (sizeof(sm_implicit_particle) + dd * sizeof(sm_real));
@@ -233,6 +233,7 @@ void sm_world_destroy(sm_world *w) {
     free(w->mats);
     free(w->colliders);
     free(w->emitters);
+    free(w->emit_buf);
     sm_implicit_ws_free(&w->imp);
     free(w->perm);
     free(w->pb);

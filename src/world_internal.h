@@ -129,6 +129,8 @@ struct sm_world {
 
     sm_emitter *emitters;
     int nemitters, emitters_cap;
+    double *emit_buf; /* positions then velocities of one emission (6 per particle), grown as needed */
+    size_t emit_cap;  /* particles emit_buf holds */
 
     sm_grid grid;
 

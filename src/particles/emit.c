@@ -95,12 +95,14 @@ sm_status sm_world_run_emitters(sm_world *w, double t0, double t1) {
         size_t count = (size_t)floor(em->owed / em->particle_mass);
         if (count == 0) continue;
         em->owed -= (double)count * em->particle_mass;
-        double *pos = sm_malloc(count * 3 * sizeof(double)), *vel = sm_malloc(count * 3 * sizeof(double));
-        if (!pos || !vel) {
-            free(pos);
-            free(vel);
-            return sm_world_fail(w, SM_ERR_NOMEM, "emitter %d: out of memory", k);
+        if (count > w->emit_cap) { /* scratch kept by the world: steady emission allocates nothing */
+            size_t cap = count + count / 2;
+            double *q = sm_realloc(w->emit_buf, cap * 6 * sizeof(double));
+            if (!q) return sm_world_fail(w, SM_ERR_NOMEM, "emitter %d: out of memory", k);
+            w->emit_buf = q;
+            w->emit_cap = cap;
         }
+        double *pos = w->emit_buf, *vel = w->emit_buf + 3 * count;
         for (size_t i = 0; i < count; i++) {
             double x[3] = {0, 0, 0};
             for (int tries = 0;; tries++) {
@@ -117,8 +119,6 @@ sm_status sm_world_run_emitters(sm_world *w, double t0, double t1) {
         }
         size_t first = w->p.n;
         sm_status st = sm_world_add_particles(w, count, pos, vel, e->material, e->ppc);
-        free(pos);
-        free(vel);
         if (st != SM_OK) return st;
         sm_world_init_stress(w, first);
     }

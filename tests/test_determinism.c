@@ -1,5 +1,6 @@
 /* Determinism (DESIGN §4): the hash of all particle state after 50 steps of a collapsing sand
- * block with colliders is identical for 1 and 2 threads, and for two runs with the same input;
+ * block with colliders is identical for 1, 2 and 3 threads (3 splits the blocks unevenly), and for
+ * two runs with the same input;
  * the state does change over the 50 steps (so the hash is not trivially constant). 2D and 3D,
  * both kernels, APIC and FLIP. */
 #include "test_util.h"
@@ -72,15 +73,18 @@ int main(void) {
         for (int k = 0; k < 2; k++)
             for (int t = 0; t < 2; t++) {
                 sm_transfer tr = t ? SM_TRANSFER_FLIP : SM_TRANSFER_APIC;
-                uint64_t s1, s2, s3;
+                uint64_t s1, s2, s3, s4;
                 uint64_t h1 = run(dim, 1, (sm_kernel)k, tr, &s1);
                 uint64_t h2 = run(dim, 2, (sm_kernel)k, tr, &s2);
                 uint64_t h3 = run(dim, 2, (sm_kernel)k, tr, &s3);
-                printf("%dD %s %s: 1 thread %016llx, 2 threads %016llx, again %016llx\n", dim, k ? "cubic" : "quadratic",
-                       t ? "FLIP" : "APIC", (unsigned long long)h1, (unsigned long long)h2, (unsigned long long)h3);
+                uint64_t h4 = run(dim, 3, (sm_kernel)k, tr, &s4);
+                printf("%dD %s %s: 1 thread %016llx, 2 threads %016llx, again %016llx, 3 threads %016llx\n", dim,
+                       k ? "cubic" : "quadratic", t ? "FLIP" : "APIC", (unsigned long long)h1, (unsigned long long)h2,
+                       (unsigned long long)h3, (unsigned long long)h4);
                 CHECK(h1 != 0);
                 CHECK(h1 == h2);
                 CHECK(h2 == h3);
+                CHECK(h1 == h4);
                 CHECK(s1 == s2);
                 CHECK(h1 != s1);
             }

@@ -119,33 +119,8 @@ static inline __attribute__((always_inline)) void chunk_weights(int S, const sm_
         for (int j = 0; j < WCH; j++) {
             const sm_real X = (xb[j * D + a] - lo) * inv;
             sm_real w4[4], d4[4];
-            int b;
-            if (S == 3) {
-                b = (int)(X - SM_R(0.5));
-                sm_real fx = X - (sm_real)b;
-                sm_real t0 = SM_R(1.5) - fx, t1 = fx - SM_R(1.0), t2 = fx - SM_R(0.5);
-                w4[0] = SM_R(0.5) * t0 * t0;
-                w4[1] = SM_R(0.75) - t1 * t1;
-                w4[2] = SM_R(0.5) * t2 * t2;
-                w4[3] = 0;
-                d4[0] = -t0;
-                d4[1] = SM_R(-2.0) * t1;
-                d4[2] = t2;
-                d4[3] = 0;
-            } else {
-                b = (int)X - 1;
-                sm_real fx = X - (sm_real)b;
-                sm_real r1 = fx - SM_R(1.0), r2 = SM_R(2.0) - fx;
-                sm_real u0 = SM_R(2.0) - fx, u3 = fx - SM_R(1.0);
-                w4[0] = u0 * u0 * u0 / SM_R(6.0);
-                w4[1] = SM_R(0.5) * r1 * r1 * r1 - r1 * r1 + SM_R(2.0) / SM_R(3.0);
-                w4[2] = SM_R(0.5) * r2 * r2 * r2 - r2 * r2 + SM_R(2.0) / SM_R(3.0);
-                w4[3] = u3 * u3 * u3 / SM_R(6.0);
-                d4[0] = SM_R(-0.5) * u0 * u0;
-                d4[1] = SM_R(1.5) * r1 * r1 - SM_R(2.0) * r1;
-                d4[2] = -(SM_R(1.5) * r2 * r2 - SM_R(2.0) * r2);
-                d4[3] = SM_R(0.5) * u3 * u3;
-            }
+            const int b = S == 3 ? (int)(X - SM_R(0.5)) : (int)X - 1; /* X >= 2: truncation = floor */
+            sm_kernel_1d_at(S, X - (sm_real)b, w4, d4);
             wc->lb[a][j] = b - org;
             for (int k = 0; k < 4; k++) {
                 wc->w[a][k][j] = w4[k];

@@ -13,10 +13,10 @@
 
 #include "core/common.h"
 
-static inline __attribute__((always_inline)) int sm_kernel_1d(int S, sm_real X, sm_real w[4], sm_real dw[4]) {
+/* Weights and derivatives for the stencil starting at node b, given fx = X - b (in [0.5, 1.5)
+ * for S = 3, [1, 2) for S = 4). */
+static inline __attribute__((always_inline)) void sm_kernel_1d_at(int S, sm_real fx, sm_real w[4], sm_real dw[4]) {
     if (S == 3) {
-        int b = (int)sm_floor(X - SM_R(0.5));
-        sm_real fx = X - (sm_real)b; /* in [0.5, 1.5) */
         sm_real t0 = SM_R(1.5) - fx, t1 = fx - SM_R(1.0), t2 = fx - SM_R(0.5);
         w[0] = SM_R(0.5) * t0 * t0;
         w[1] = SM_R(0.75) - t1 * t1;
@@ -26,10 +26,7 @@ static inline __attribute__((always_inline)) int sm_kernel_1d(int S, sm_real X, 
         dw[1] = SM_R(-2.0) * t1;
         dw[2] = t2;
         dw[3] = 0;
-        return b;
     } else {
-        int b = (int)sm_floor(X) - 1;
-        sm_real fx = X - (sm_real)b; /* in [1, 2) */
         sm_real r1 = fx - SM_R(1.0), r2 = SM_R(2.0) - fx;
         sm_real u0 = SM_R(2.0) - fx, u3 = fx - SM_R(1.0); /* 2 - r for the outer nodes */
         w[0] = u0 * u0 * u0 / SM_R(6.0);
@@ -40,8 +37,13 @@ static inline __attribute__((always_inline)) int sm_kernel_1d(int S, sm_real X, 
         dw[1] = SM_R(1.5) * r1 * r1 - SM_R(2.0) * r1;
         dw[2] = -(SM_R(1.5) * r2 * r2 - SM_R(2.0) * r2);
         dw[3] = SM_R(0.5) * u3 * u3;
-        return b;
     }
+}
+
+static inline __attribute__((always_inline)) int sm_kernel_1d(int S, sm_real X, sm_real w[4], sm_real dw[4]) {
+    int b = S == 3 ? (int)sm_floor(X - SM_R(0.5)) : (int)sm_floor(X) - 1;
+    sm_kernel_1d_at(S, X - (sm_real)b, w, dw);
+    return b;
 }
 
 /* Stencil base node for position X in grid units. */

@@ -4,7 +4,8 @@
  *
  * 1. sm_svd3 / sm_svd2 on N matrices kept in L1/L2, called in a loop (throughput of independent
  *    calls, as in the particle loop): random entries in [-1, 1], and near-rotations
- *    F = R (I + 1e-3 noise), the typical elastic F of MPM.
+ *    F = R (I + 1e-3 noise), the typical elastic F of MPM. For sm_svd3 also the latency: each
+ *    call's input then depends on the previous call's output.
  * 2. Plasticity, ns per particle: the scalar path of step_dim.c (svd + sm_dp_project + hardening +
  *    sm_hencky_tau + the two matrix products) against sm_plastic_lanes3/2 (SM_PLASTIC_LANES
  *    particles per call, structure of arrays, including the gather/scatter to array-of-structs).
@@ -82,6 +83,28 @@ static double time_svd(int d, const sm_real *F, size_t n, int reps) {
             }
         double t = (now() - t0) / ((double)n * reps) * 1e9;
         sink = acc;
+        if (t < best) best = t;
+    }
+    return best;
+}
+
+/* ns per sm_svd3 call when each call waits for the previous one (its input gets 0 * an output
+ * added): the latency of one call, against the throughput figure of time_svd, where independent
+ * calls overlap in the out-of-order core. */
+static double time_svd3_latency(const sm_real *F, size_t n, int reps) {
+    double best = 1e30;
+    for (int r = 0; r < 5; r++) {
+        sm_real dep = 0;
+        double t0 = now();
+        for (int k = 0; k < reps; k++)
+            for (size_t i = 0; i < n; i++) {
+                sm_real G[9], U[9], V[9], s[3];
+                for (int j = 0; j < 9; j++) G[j] = F[9 * i + j] + dep;
+                sm_svd3(G, U, s, V);
+                dep = (s[2] + U[0] + V[8]) * (sm_real)0;
+            }
+        double t = (now() - t0) / ((double)n * reps) * 1e9;
+        sink = (double)dep;
         if (t < best) best = t;
     }
     return best;
@@ -228,10 +251,12 @@ int main(int argc, char **argv) {
            SM_PLASTIC_LANES);
     for (int d = 3; d >= 2; d--) {
         for (size_t i = 0; i < n * d * d; i++) F[i] = (sm_real)urand(-1, 1);
-        double tr = time_svd(d, F, n, reps);
+        double tr = time_svd(d, F, n, reps), lr = d == 3 ? time_svd3_latency(F, n, reps) : 0;
         for (size_t i = 0; i < n; i++) near_rotation(d, 1e-3, F + i * d * d);
-        double tn = time_svd(d, F, n, reps);
+        double tn = time_svd(d, F, n, reps), ln = d == 3 ? time_svd3_latency(F, n, reps) : 0;
         printf("sm_svd%d: random %7.1f ns/call   near-rotation %7.1f ns/call\n", d, tr, tn);
+        if (d == 3)
+            printf("sm_svd3 latency (dependent calls): random %7.1f ns   near-rotation %7.1f ns\n", lr, ln);
     }
 
     double deg = SM_PI / 180.0;

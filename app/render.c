@@ -386,6 +386,20 @@ static void splat_one(const proj *p, uint32_t idx, int y0, int y1, int w, float 
     }
 }
 
+/* Bands (of BAND_ROWS rows) that particle p covers in an image of h rows: [*b0, *b1]; 0 if none
+ * (hidden, or above / below the image). */
+static int proj_bands(const proj *p, int h, int *b0, int *b1) {
+    if (!(p->sr >= 0.0f)) return 0;
+    int r0, r1;
+    proj_rows(p, &r0, &r1);
+    if (r0 < 0) r0 = 0;
+    if (r1 > h - 1) r1 = h - 1;
+    if (r0 > r1) return 0;
+    *b0 = r0 / BAND_ROWS;
+    *b1 = r1 / BAND_ROWS;
+    return 1;
+}
+
 /* Splats all particles into a w x h target (zb = +inf, zi = NO_PARTICLE initially). */
 static int splat_all(const proj *P, size_t n, int w, int h, float *zb, uint32_t *zi, int threads) {
     (void)threads; /* without OpenMP */
@@ -406,13 +420,9 @@ OMP(omp parallel for schedule(static) num_threads(threads))
         size_t i0 = (size_t)c * per, i1 = i0 + per < n ? i0 + per : n;
         size_t *cc = cnt + (size_t)c * (size_t)nb;
         for (size_t i = i0; i < i1; i++) {
-            if (!(P[i].sr >= 0.0f)) continue;
-            int r0, r1;
-            proj_rows(&P[i], &r0, &r1);
-            if (r0 < 0) r0 = 0;
-            if (r1 > h - 1) r1 = h - 1;
-            if (r0 > r1) continue;
-            for (int b = r0 / BAND_ROWS; b <= r1 / BAND_ROWS; b++) cc[b]++;
+            int b0, b1;
+            if (!proj_bands(&P[i], h, &b0, &b1)) continue;
+            for (int b = b0; b <= b1; b++) cc[b]++;
         }
     }
     size_t total = 0;
@@ -438,13 +448,9 @@ OMP(omp parallel for schedule(static) num_threads(threads))
         size_t i0 = (size_t)c * per, i1 = i0 + per < n ? i0 + per : n;
         size_t *cc = cnt + (size_t)c * (size_t)nb;
         for (size_t i = i0; i < i1; i++) {
-            if (!(P[i].sr >= 0.0f)) continue;
-            int r0, r1;
-            proj_rows(&P[i], &r0, &r1);
-            if (r0 < 0) r0 = 0;
-            if (r1 > h - 1) r1 = h - 1;
-            if (r0 > r1) continue;
-            for (int b = r0 / BAND_ROWS; b <= r1 / BAND_ROWS; b++) {
+            int b0, b1;
+            if (!proj_bands(&P[i], h, &b0, &b1)) continue;
+            for (int b = b0; b <= b1; b++) {
                 binned *e = &list[cc[b]++];
                 e->p = P[i];
                 e->idx = (uint32_t)i;

@@ -40,14 +40,15 @@ static int build(const sm_bench_case *c, sm_world **out, char *err, size_t errle
         return status_code(s);
     }
     sm_material_def m = sm_material_def_sand(); /* hardening 35/9/0.2/10 */
-    int mat = sm_world_add_material(w, &m);
+    int mat = -1;
+    sm_world_add_material(w, &m, &mat);
     sm_collider_def g = sm_collider_def_default();
     g.shape_count = 1;
     g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
     g.shapes[0].center[1] = 3 * dx;
     g.shapes[0].normal[1] = 1;
     g.mode = SM_COLLIDE_STICKY;
-    if (mat < 0 || sm_world_add_collider(w, &g) < 0) {
+    if (mat < 0 || sm_world_add_collider(w, &g, NULL) != SM_OK) {
         snprintf(err, errlen, "%dD scene: %s", dim, sm_world_errmsg(w));
         sm_world_destroy(w);
         return 2;

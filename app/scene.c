@@ -1443,11 +1443,11 @@ static int validate(lua_State *L) {
     for (int a = 0; a < d->dim; a++) {
         /* as sm_world_create checks it, so that load (without a world) catches it too */
         double len = d->domain_max[a] - d->domain_min[a], cells = ceil(len / d->dx - 1e-9);
-        if (cells < 6 || cells > 65536) {
+        if (cells < 6 || cells > SM_MAX_CELLS_PER_AXIS) {
             char x[32], y[32];
             size_t old = vpush(v, "domain");
-            vfail(v, "%s cells along %c (length %s, dx %s): need 6 to 65536", fmt_num(x, cells), "xyz"[a],
-                  fmt_num(y, len), fmt_num(b, d->dx));
+            vfail(v, "%s cells along %c (length %s, dx %s): need 6 to %d", fmt_num(x, cells), "xyz"[a],
+                  fmt_num(y, len), fmt_num(b, d->dx), SM_MAX_CELLS_PER_AXIS);
             vpop(v, old);
         }
     }
@@ -1967,8 +1967,8 @@ int sm_scene_build(sm_scene *s, char *err, size_t errlen) {
     if (st != SM_OK) return fail_msg(err, errlen, status_code(st), "%s: %s", s->path, msg);
     int rc = 0;
     for (int i = 0; i < s->nmat; i++)
-        if (sm_world_add_material(w, &s->mats[i]) != i) {
-            rc = fail_msg(err, errlen, 2, "%s: materials.%s: %s", s->path, s->mat_names[i], sm_world_errmsg(w));
+        if ((st = sm_world_add_material(w, &s->mats[i], NULL)) != SM_OK) {
+            rc = fail_msg(err, errlen, status_code(st), "%s: materials.%s: %s", s->path, s->mat_names[i], sm_world_errmsg(w));
             goto fail;
         }
     for (int i = 0; i < s->ncol; i++) {
@@ -1977,8 +1977,8 @@ int sm_scene_build(sm_scene *s, char *err, size_t errlen) {
             c->def.motion = scene_motion;
             c->def.motion_user = c;
         }
-        if (sm_world_add_collider(w, &c->def) < 0) {
-            rc = fail_msg(err, errlen, 2, "%s: colliders[%d]: %s", s->path, i + 1, sm_world_errmsg(w));
+        if ((st = sm_world_add_collider(w, &c->def, NULL)) != SM_OK) {
+            rc = fail_msg(err, errlen, status_code(st), "%s: colliders[%d]: %s", s->path, i + 1, sm_world_errmsg(w));
             goto fail;
         }
         if (s->motion_err[0]) {
@@ -2005,8 +2005,8 @@ int sm_scene_build(sm_scene *s, char *err, size_t errlen) {
         }
     }
     for (int i = 0; i < s->nemit; i++)
-        if (sm_world_add_emitter(w, &s->emits[i]) < 0) {
-            rc = fail_msg(err, errlen, 2, "%s: emitters[%d]: %s", s->path, i + 1, sm_world_errmsg(w));
+        if ((st = sm_world_add_emitter(w, &s->emits[i], NULL)) != SM_OK) {
+            rc = fail_msg(err, errlen, status_code(st), "%s: emitters[%d]: %s", s->path, i + 1, sm_world_errmsg(w));
             goto fail;
         }
     s->world = w;

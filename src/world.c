@@ -104,9 +104,8 @@ static int resolve_threads(int t) {
     return t < 1 ? 1 : t;
 }
 
-sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, size_t errlen) {
+sm_status sm_world_def_check(const sm_world_def *def, char *err, size_t errlen) {
     char msg[256] = "";
-    *out = NULL;
     if (!def) snprintf(msg, sizeof msg, "world definition is NULL");
     else if (def->dim != 2 && def->dim != 3) snprintf(msg, sizeof msg, "dim: must be 2 or 3, got %d", def->dim);
     else if (!(def->dx > 0) || !isfinite(def->dx)) snprintf(msg, sizeof msg, "dx: must be > 0, got %g", def->dx);
@@ -137,8 +136,8 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
                 snprintf(msg, sizeof msg, "domain: at least 6 cells needed along axis %c, got %.0f (length %g, dx %g)", "xyz"[a], cells, len, def->dx);
                 break;
             }
-            if (cells > 4194304) {
-                snprintf(msg, sizeof msg, "domain: %.0f cells along axis %c is more than 4194304", cells, "xyz"[a]);
+            if (cells > SM_MAX_CELLS_PER_AXIS) {
+                snprintf(msg, sizeof msg, "domain: %.0f cells along axis %c is more than %d", cells, "xyz"[a], SM_MAX_CELLS_PER_AXIS);
                 break;
             }
         }
@@ -147,6 +146,13 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
         if (err && errlen) snprintf(err, errlen, "%s", msg);
         return SM_ERR_INVALID;
     }
+    return SM_OK;
+}
+
+sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, size_t errlen) {
+    *out = NULL;
+    sm_status st = sm_world_def_check(def, err, errlen);
+    if (st != SM_OK) return st;
     sm_world *w = sm_calloc(1, sizeof *w);
     if (!w) {
         if (err && errlen) snprintf(err, errlen, "out of memory");
@@ -295,35 +301,36 @@ double sm_hardening_friction_angle(const sm_material_def *m, double q) {
 
 double sm_alpha_from_friction_angle(double degrees) { return sm_dp_alpha(degrees * DEG); }
 
-int sm_world_add_material(sm_world *w, const sm_material_def *m) {
-    if (!m) return (sm_world_fail(w, SM_ERR_INVALID, "material definition is NULL"), -1);
+sm_status sm_world_add_material(sm_world *w, const sm_material_def *m, int *id) {
+    if (id) *id = -1;
+    if (!m) return sm_world_fail(w, SM_ERR_INVALID, "material definition is NULL");
     if (m->kind != SM_MATERIAL_SAND && m->kind != SM_MATERIAL_ELASTIC)
-        return (sm_world_fail(w, SM_ERR_INVALID, "material kind: unknown value %d", (int)m->kind), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "material kind: unknown value %d", (int)m->kind);
     if (!(m->density > 0) || !isfinite(m->density))
-        return (sm_world_fail(w, SM_ERR_INVALID, "density: must be > 0, got %g", m->density), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "density: must be > 0, got %g", m->density);
     if (!(m->youngs_modulus > 0) || !isfinite(m->youngs_modulus))
-        return (sm_world_fail(w, SM_ERR_INVALID, "E: must be > 0, got %g", m->youngs_modulus), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "E: must be > 0, got %g", m->youngs_modulus);
     if (!(m->poisson_ratio > -1 && m->poisson_ratio < 0.5))
-        return (sm_world_fail(w, SM_ERR_INVALID, "nu: must be in (-1, 0.5), got %g", m->poisson_ratio), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "nu: must be in (-1, 0.5), got %g", m->poisson_ratio);
     if (m->kind == SM_MATERIAL_SAND) {
         if (m->hardening) {
             const double h[4] = {m->h0, m->h1, m->h2, m->h3};
             for (int i = 0; i < 4; i++)
                 if (!isfinite(h[i]) || h[i] < 0)
-                    return (sm_world_fail(w, SM_ERR_INVALID, "h%d: must be finite and >= 0, got %g", i, h[i]), -1);
+                    return sm_world_fail(w, SM_ERR_INVALID, "h%d: must be finite and >= 0, got %g", i, h[i]);
             if (!(m->h0 > m->h3))
-                return (sm_world_fail(w, SM_ERR_INVALID, "hardening: need h0 > h3 (thesis §3.5.3), got h0 = %g, h3 = %g", m->h0, m->h3), -1);
+                return sm_world_fail(w, SM_ERR_INVALID, "hardening: need h0 > h3 (thesis §3.5.3), got h0 = %g, h3 = %g", m->h0, m->h3);
             if (!(m->h0 < 90) || !(m->h0 + m->h1 < 90 * 4))
-                return (sm_world_fail(w, SM_ERR_INVALID, "h0: must be < 90 degrees, got %g", m->h0), -1);
+                return sm_world_fail(w, SM_ERR_INVALID, "h0: must be < 90 degrees, got %g", m->h0);
         } else if (!(m->friction_angle >= 0 && m->friction_angle < 90)) {
-            return (sm_world_fail(w, SM_ERR_INVALID, "friction_angle: must be in [0, 90) degrees, got %g", m->friction_angle), -1);
+            return sm_world_fail(w, SM_ERR_INVALID, "friction_angle: must be in [0, 90) degrees, got %g", m->friction_angle);
         }
     }
-    if (w->nmats >= 65535) return (sm_world_fail(w, SM_ERR_INVALID, "too many materials (65535)"), -1);
+    if (w->nmats >= 65535) return sm_world_fail(w, SM_ERR_INVALID, "too many materials (65535)");
     if (w->nmats == w->mats_cap) {
         int cap = w->mats_cap ? 2 * w->mats_cap : 4;
         sm_material_rt *q = sm_realloc(w->mats, (size_t)cap * sizeof *q);
-        if (!q) return (sm_world_fail(w, SM_ERR_NOMEM, "out of memory"), -1);
+        if (!q) return sm_world_fail(w, SM_ERR_NOMEM, "out of memory");
         w->mats = q;
         w->mats_cap = cap;
     }
@@ -345,7 +352,9 @@ int sm_world_add_material(sm_world *w, const sm_material_def *m) {
         r->alpha0 = (sm_real)(r->hardening ? sm_dp_alpha(sm_hardening_phi(0, r->h0, r->h1, r->h2, r->h3))
                                            : sm_dp_alpha(m->friction_angle * DEG));
     r->wave_speed = sqrt((lambda + 2 * mu) / m->density);
-    return w->nmats++;
+    if (id) *id = w->nmats;
+    w->nmats++;
+    return SM_OK;
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -481,25 +490,26 @@ static int check_shape(sm_world *w, const sm_shape *s, int idx) {
     return 1;
 }
 
-int sm_world_add_collider(sm_world *w, const sm_collider_def *c) {
-    if (!c) return (sm_world_fail(w, SM_ERR_INVALID, "collider definition is NULL"), -1);
+sm_status sm_world_add_collider(sm_world *w, const sm_collider_def *c, int *id) {
+    if (id) *id = -1;
+    if (!c) return sm_world_fail(w, SM_ERR_INVALID, "collider definition is NULL");
     if (c->shape_count < 1 || c->shape_count > SM_MAX_COLLIDER_SHAPES)
-        return (sm_world_fail(w, SM_ERR_INVALID, "collider shapes: need 1 to %d, got %d", SM_MAX_COLLIDER_SHAPES, c->shape_count), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "collider shapes: need 1 to %d, got %d", SM_MAX_COLLIDER_SHAPES, c->shape_count);
     for (int i = 0; i < c->shape_count; i++)
-        if (!check_shape(w, &c->shapes[i], i)) return -1;
+        if (!check_shape(w, &c->shapes[i], i)) return SM_ERR_INVALID;
     if (c->mode != SM_COLLIDE_STICKY && c->mode != SM_COLLIDE_SLIP && c->mode != SM_COLLIDE_SEPARATE)
-        return (sm_world_fail(w, SM_ERR_INVALID, "collider mode: unknown value %d", (int)c->mode), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "collider mode: unknown value %d", (int)c->mode);
     if (!(c->friction >= 0) || !isfinite(c->friction))
-        return (sm_world_fail(w, SM_ERR_INVALID, "collider friction: must be >= 0, got %g", c->friction), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "collider friction: must be >= 0, got %g", c->friction);
     if (!finite3(c->velocity) || !finite3(c->angular_velocity) || !finite3(c->pose.position))
-        return (sm_world_fail(w, SM_ERR_INVALID, "collider motion: velocity, angular velocity and position must be finite"), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "collider motion: velocity, angular velocity and position must be finite");
     double qn = 0;
     for (int k = 0; k < 4; k++) qn += c->pose.rotation[k] * c->pose.rotation[k];
-    if (!(fabs(qn - 1) < 1e-6)) return (sm_world_fail(w, SM_ERR_INVALID, "collider pose.rotation: must be a unit quaternion"), -1);
+    if (!(fabs(qn - 1) < 1e-6)) return sm_world_fail(w, SM_ERR_INVALID, "collider pose.rotation: must be a unit quaternion");
     if (w->ncolliders + w->nwalls + 1 > w->colliders_cap) {
         int cap = 2 * (w->ncolliders + w->nwalls + 1);
         sm_collider *q = sm_realloc(w->colliders, (size_t)cap * sizeof *q);
-        if (!q) return (sm_world_fail(w, SM_ERR_NOMEM, "out of memory"), -1);
+        if (!q) return sm_world_fail(w, SM_ERR_NOMEM, "out of memory");
         w->colliders = q;
         w->colliders_cap = cap;
     }
@@ -515,7 +525,9 @@ int sm_world_add_collider(sm_world *w, const sm_collider_def *c) {
             memcpy(w->colliders[w->ncolliders].R1, w->colliders[w->ncolliders].R0, sizeof(double) * 9);
         }
     }
-    return w->ncolliders++;
+    if (id) *id = w->ncolliders;
+    w->ncolliders++;
+    return SM_OK;
 }
 
 double sm_world_collider_distance(const sm_world *w, int id, const double x[3], double grad[3]) {

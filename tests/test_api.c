@@ -65,23 +65,24 @@ int main(void) {
         /* --- material errors --- */
         sm_material_def m = sm_material_def_sand();
         m.youngs_modulus = -5;
-        CHECK(sm_world_add_material(w, &m) == -1);
+        CHECK(sm_world_add_material(w, &m, NULL) == SM_ERR_INVALID);
         CHECK_MSG(sm_world_errmsg(w), "E: must be > 0, got -5");
         m = sm_material_def_sand();
         m.poisson_ratio = 0.5;
-        CHECK(sm_world_add_material(w, &m) == -1);
+        CHECK(sm_world_add_material(w, &m, NULL) == SM_ERR_INVALID);
         CHECK_MSG(sm_world_errmsg(w), "nu");
         m = sm_material_def_sand();
         m.h3 = 40; /* h0 > h3 required */
-        CHECK(sm_world_add_material(w, &m) == -1);
+        CHECK(sm_world_add_material(w, &m, NULL) == SM_ERR_INVALID);
         CHECK_MSG(sm_world_errmsg(w), "h0 > h3");
         m = sm_material_def_sand();
         m.hardening = 0;
         m.friction_angle = 95;
-        CHECK(sm_world_add_material(w, &m) == -1);
+        CHECK(sm_world_add_material(w, &m, NULL) == SM_ERR_INVALID);
         CHECK_MSG(sm_world_errmsg(w), "friction_angle");
         m = sm_material_def_sand();
-        int sand = sm_world_add_material(w, &m);
+        int sand = -1;
+        CHECK(sm_world_add_material(w, &m, &sand) == SM_OK);
         CHECK(sand == 0);
         /* --- particle and collider errors --- */
         double far[3] = {5, 0.5, 0.5};
@@ -91,16 +92,16 @@ int main(void) {
         CHECK(sm_world_add_particles(w, 1, ok, NULL, 7, 8) == SM_ERR_INVALID);
         CHECK_MSG(sm_world_errmsg(w), "material: unknown id 7");
         sm_collider_def c = sm_collider_def_default();
-        CHECK(sm_world_add_collider(w, &c) == -1);
+        CHECK(sm_world_add_collider(w, &c, NULL) == SM_ERR_INVALID);
         CHECK_MSG(sm_world_errmsg(w), "shapes");
         c.shape_count = 1;
         c.shapes[0] = sm_shape_default(SM_SHAPE_SPHERE);
         c.shapes[0].radius = -1;
-        CHECK(sm_world_add_collider(w, &c) == -1);
+        CHECK(sm_world_add_collider(w, &c, NULL) == SM_ERR_INVALID);
         CHECK_MSG(sm_world_errmsg(w), "radius: must be > 0, got -1");
         c.shapes[0].radius = 0.1;
         c.friction = -0.5;
-        CHECK(sm_world_add_collider(w, &c) == -1);
+        CHECK(sm_world_add_collider(w, &c, NULL) == SM_ERR_INVALID);
         CHECK_MSG(sm_world_errmsg(w), "friction");
         CHECK(sm_world_step(w, -1) == SM_ERR_INVALID);
 
@@ -160,7 +161,7 @@ int main(void) {
 
         /* --- an overflow inside the step (finite state, huge velocity): the grid check --- */
         w = small_world(dim);
-        sand = sm_world_add_material(w, &m);
+        CHECK(sm_world_add_material(w, &m, &sand) == SM_OK);
         CHECK(sm_world_seed_shape(w, &s, &sd, &added) == SM_OK);
         v = sm_world_particle_velocities(w);
 #if SM_DOUBLE

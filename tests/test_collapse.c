@@ -17,14 +17,15 @@ static void run(int dim) {
     CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_OK);
     if (!w) return;
     sm_material_def m = sm_material_def_sand();
-    int mat = sm_world_add_material(w, &m);
+    int mat = -1;
+    CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
     sm_collider_def c = sm_collider_def_default();
     c.shape_count = 1;
     c.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
     c.shapes[0].center[1] = ground;
     c.shapes[0].normal[1] = 1;
     c.mode = SM_COLLIDE_STICKY;
-    CHECK(sm_world_add_collider(w, &c) == 0);
+    CHECK(sm_world_add_collider(w, &c, NULL) == SM_OK);
     sm_shape col = sm_shape_default(dim == 2 ? SM_SHAPE_BOX : SM_SHAPE_CYLINDER);
     col.center[0] = 0.4;
     col.center[1] = ground + H / 2;

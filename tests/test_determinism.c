@@ -17,9 +17,11 @@ static uint64_t run(int dim, int threads, sm_kernel kernel, sm_transfer tr, uint
     char err[256];
     if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) return 0;
     sm_material_def m = sm_material_def_sand();
-    int sand = sm_world_add_material(w, &m);
+    int sand = -1;
+    CHECK(sm_world_add_material(w, &m, &sand) == SM_OK);
     sm_material_def e = sm_material_def_elastic();
-    int ball = sm_world_add_material(w, &e);
+    int ball = -1;
+    CHECK(sm_world_add_material(w, &e, &ball) == SM_OK);
     sm_collider_def g = sm_collider_def_default();
     g.shape_count = 1;
     g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
@@ -27,7 +29,7 @@ static uint64_t run(int dim, int threads, sm_kernel kernel, sm_transfer tr, uint
     g.shapes[0].normal[1] = 1;
     g.mode = SM_COLLIDE_SLIP;
     g.friction = 0.4;
-    sm_world_add_collider(w, &g);
+    CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
     sm_collider_def s = sm_collider_def_default();
     s.shape_count = 1;
     s.shapes[0] = sm_shape_default(SM_SHAPE_SPHERE);
@@ -38,7 +40,7 @@ static uint64_t run(int dim, int threads, sm_kernel kernel, sm_transfer tr, uint
     s.velocity[0] = -1.0;
     s.mode = SM_COLLIDE_SEPARATE;
     s.friction = 0.2;
-    sm_world_add_collider(w, &s);
+    CHECK(sm_world_add_collider(w, &s, NULL) == SM_OK);
     sm_shape box = sm_shape_default(SM_SHAPE_BOX);
     box.center[0] = 0.45;
     box.center[1] = 0.3;

@@ -17,13 +17,14 @@ static uint64_t run(int dim, int threads, double *emitted, double *mass, double 
     sm_material_def m = sm_material_def_sand();
     m.hardening = 0;
     m.friction_angle = 30;
-    int mat = sm_world_add_material(w, &m);
+    int mat = -1;
+    CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
     sm_collider_def g = sm_collider_def_default();
     g.shape_count = 1;
     g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
     g.shapes[0].center[1] = 0.1;
     g.shapes[0].normal[1] = 1;
-    sm_world_add_collider(w, &g);
+    CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
     sm_emitter_def e = sm_emitter_def_default();
     e.shape = sm_shape_default(SM_SHAPE_CYLINDER);
     e.shape.center[0] = e.shape.center[2] = 0.5;
@@ -36,7 +37,8 @@ static uint64_t run(int dim, int threads, double *emitted, double *mass, double 
     e.rate = dim == 2 ? 20.0 : 2.0;
     e.start = 0.1;
     e.stop = 0.3;
-    int id = sm_world_add_emitter(w, &e);
+    int id = -1;
+    CHECK(sm_world_add_emitter(w, &e, &id) == SM_OK);
     CHECK(id == 0);
     CHECK(sm_world_advance(w, 0.1) == SM_OK);
     sm_diagnostics d;
@@ -59,15 +61,15 @@ static uint64_t run(int dim, int threads, double *emitted, double *mass, double 
     /* refused definitions */
     sm_emitter_def bad = e;
     bad.rate = -1;
-    CHECK(sm_world_add_emitter(w, &bad) == -1);
+    CHECK(sm_world_add_emitter(w, &bad, NULL) == SM_ERR_INVALID);
     CHECK(strstr(sm_world_errmsg(w), "rate") != NULL);
     bad = e;
     bad.shape.center[0] = 5;
-    CHECK(sm_world_add_emitter(w, &bad) == -1);
+    CHECK(sm_world_add_emitter(w, &bad, NULL) == SM_ERR_INVALID);
     CHECK(strstr(sm_world_errmsg(w), "shape") != NULL);
     bad = e;
     bad.stop = bad.start;
-    CHECK(sm_world_add_emitter(w, &bad) == -1);
+    CHECK(sm_world_add_emitter(w, &bad, NULL) == SM_ERR_INVALID);
     uint64_t h = sm_world_state_hash(w);
     sm_world_destroy(w);
     return h;

@@ -29,7 +29,8 @@ static void run(int dim, sm_kernel kernel) {
     CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_OK);
     if (!w) return;
     sm_material_def m = sm_material_def_sand();
-    int mat = sm_world_add_material(w, &m);
+    int mat = -1;
+    CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
     sm_shape box = sm_shape_default(SM_SHAPE_BOX);
     box.center[0] = 0.5;
     box.center[1] = 0.6;

@@ -38,7 +38,8 @@ static sm_world *blocks(int dim, sm_integrator integ, int sand, double max_dt, i
     if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) return NULL;
     sm_material_def m = sand ? sm_material_def_sand() : sm_material_def_elastic();
     m.youngs_modulus = 1e5;
-    int mat = sm_world_add_material(w, &m);
+    int mat = -1;
+    CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
     sm_shape b = sm_shape_default(SM_SHAPE_BOX);
     b.center[1] = ground ? 0.1 + 0.1 + 0.25 * DX(dim) : 0.3;
     b.center[2] = 0.2;
@@ -53,7 +54,7 @@ static sm_world *blocks(int dim, sm_integrator integ, int sand, double max_dt, i
         g.shapes[0].center[1] = 0.1;
         g.shapes[0].normal[1] = 1;
         g.mode = SM_COLLIDE_STICKY;
-        sm_world_add_collider(w, &g);
+        CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
         b.center[0] = 0.5;
         sm_world_seed_shape(w, &b, &sd, NULL);
     } else {

@@ -31,7 +31,8 @@ static void run(int dim, double mu, double t_end, int sticks, double *accel, dou
     if (!w) return;
     sm_material_def m = sm_material_def_elastic();
     m.youngs_modulus = 1e6; /* a stiff block: little elastic bouncing at first contact */
-    int mat = sm_world_add_material(w, &m);
+    int mat = -1;
+    CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
     const double n[3] = {-sin(TH), cos(TH), 0}, tdown[3] = {-cos(TH), -sin(TH), 0};
     const double p0[3] = {1.0, 0.6, 0.15};
     sm_collider_def c = sm_collider_def_default();
@@ -43,7 +44,7 @@ static void run(int dim, double mu, double t_end, int sticks, double *accel, dou
     }
     c.mode = SM_COLLIDE_SLIP;
     c.friction = mu;
-    CHECK(sm_world_add_collider(w, &c) == 0);
+    CHECK(sm_world_add_collider(w, &c, NULL) == SM_OK);
     /* Block rotated by theta about z, bottom face on the plane. */
     sm_shape box = sm_shape_default(SM_SHAPE_BOX);
     const double hx = 0.1, hy = 0.05, hz = 0.05, s_up = 0.6;

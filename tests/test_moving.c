@@ -27,7 +27,7 @@ static sm_world *world(int dim, int *mat, int elastic) {
     if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) return NULL;
     sm_material_def m = elastic ? sm_material_def_elastic() : sm_material_def_sand();
     if (elastic) m.youngs_modulus = 3e5;
-    *mat = sm_world_add_material(w, &m);
+    CHECK(sm_world_add_material(w, &m, mat) == SM_OK);
     return w;
 }
 
@@ -57,7 +57,7 @@ int main(void) {
         g.shapes[0].normal[1] = 1;
         g.mode = SM_COLLIDE_STICKY;
         g.velocity[0] = 0.3;
-        CHECK(sm_world_add_collider(w, &g) == 0);
+        CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
         seed_block(w, dim, mat, 0.1);
         CHECK(sm_world_advance(w, 0.4) == SM_OK);
         sm_diagnostics d;
@@ -82,7 +82,7 @@ int main(void) {
             p.mode = SM_COLLIDE_SEPARATE;
             if (scripted) p.motion = plate_motion;
             else p.velocity[1] = 0.5;
-            CHECK(sm_world_add_collider(w, &p) == 0);
+            CHECK(sm_world_add_collider(w, &p, NULL) == SM_OK);
             seed_block(w, dim, mat, 0.1);
             /* Mean velocity from the centre of mass over [0.1 s, 0.4 s]: the elastic block rings
              * after the plate starts at full speed, so the instantaneous velocity oscillates. */

@@ -240,7 +240,8 @@ static void test_default(void) {
         sm_world *w = NULL;
         CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_OK);
         sm_material_def sand = sm_material_def_sand();
-        int mat = sm_world_add_material(w, &sand);
+        int mat = -1;
+        CHECK(sm_world_add_material(w, &sand, &mat) == SM_OK);
         sm_shape col = sm_shape_default(SM_SHAPE_CYLINDER);
         col.center[1] = 0.2;
         col.radius = 0.1;
@@ -313,7 +314,7 @@ static const bad_case bad[] = {
     {"return { dx = 0.1, fps = 24, frames = 1, domain = { min = {0, 0, 0}, max = {1, 0, 1} } }\n",
      {"bad.lua:1: domain: empty or inverted along y: min 0, max 0"}},
     {"return { dx = 0.1, fps = 24, frames = 1, domain = { min = {0, 0, 0}, max = {1, -1, 1} } }\n", {"domain: empty or inverted along y"}},
-    {"return { dx = 0.1, fps = 24, frames = 1, domain = { min = {0, 0, 0}, max = {0.3, 1, 1} } }\n", {"bad.lua:1: domain: 3 cells along x (length 0.3, dx 0.1): need 6 to 65536"}},
+    {"return { dx = 0.1, fps = 24, frames = 1, domain = { min = {0, 0, 0}, max = {0.3, 1, 1} } }\n", {"bad.lua:1: domain: 3 cells along x (length 0.3, dx 0.1): need 6 to 4194304"}},
     {"return { dx = 0.1, fps = 24, frames = 1, domain = { mn = {0, 0, 0} } }\n", {"domain.mn: unknown key (did you mean \"min\"?)"}},
     {"return { dx = 0.1,\n" OK3 "  materials = { sand = { model = 'sand', E = -5, friction_angle = 30 } } }\n",
      {"bad.lua:3: materials.sand.E: must be > 0, got -5"}},

@@ -15,7 +15,7 @@ static sm_world *world(int dim, double dx) {
     char err[256];
     sm_world_create(&def, &w, err, sizeof err);
     sm_material_def m = sm_material_def_sand();
-    sm_world_add_material(w, &m);
+    CHECK(sm_world_add_material(w, &m, NULL) == SM_OK);
     return w;
 }
 

@@ -26,7 +26,8 @@ static sm_world *make(int dim, sm_kernel kernel, sm_transfer transfer, unsigned 
         return NULL;
     }
     sm_material_def m = sm_material_def_sand();
-    int mat = sm_world_add_material(w, &m);
+    int mat = -1;
+    CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
     /* Random particles in the middle of the domain with random velocities and affine B. */
     size_t n = dim == 2 ? 400 : 1500;
     double *x = malloc(n * 3 * sizeof(double)), *v = malloc(n * 3 * sizeof(double));

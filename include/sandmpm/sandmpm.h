@@ -10,15 +10,57 @@
  * Matrices are row-major. The library never prints and never exits; every call that can fail
  * returns an sm_status and leaves a message in sm_world_errmsg().
  *
- * Typical use:
- *   sm_world_def def = sm_world_def_default();
- *   def.dim = 3; def.dx = 0.02; ...
- *   sm_world *w; if (sm_world_create(&def, &w) != SM_OK) ...
- *   int sand = sm_world_add_material(w, &mat);           // mat = sm_material_def_sand()
- *   sm_world_seed_shape(w, &shape, &seed);               // particles
- *   sm_world_add_collider(w, &collider);                 // ground, containers, tools
- *   while (...) sm_world_advance(w, frame_end_time);     // adaptive steps, lands on frame_end_time
- *   sm_world_destroy(w);
+ * Particle storage: the arrays that sm_world_particles() and sm_world_particle_velocities() hand
+ * out stay valid until the next call that steps the world or adds particles (sm_world_step,
+ * sm_world_advance, sm_world_seed_shape, sm_world_add_particles, emitters inside a step), which
+ * may reallocate them. A step also reorders the particles in storage (by grid block, for speed):
+ * index i may hold another particle after a step. Read what you need between steps.
+ *
+ * A complete program (built and run as the test test_header_example, so it cannot go stale): a
+ * sand column collapses on a sticky ground for half a second.
+ * @code
+ * #include <stdio.h>
+ * #include "sandmpm/sandmpm.h"
+ *
+ * int main(void) {
+ *     sm_world_def def = sm_world_def_default(); // dim 3, dx 0.02, domain [0,1]^3, gravity -y
+ *     def.dx = 0.025;
+ *     sm_world *w;
+ *     char err[256];
+ *     if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) {
+ *         fprintf(stderr, "%s\n", err);
+ *         return 2;
+ *     }
+ *     sm_material_def sand = sm_material_def_sand();   // rho 2200, E 3.537e5, nu 0.3, 35/9/0.2/10
+ *     int mat = -1;
+ *     sm_collider_def ground = sm_collider_def_default(); // sticky
+ *     ground.shape_count = 1;
+ *     ground.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
+ *     ground.shapes[0].center[1] = 0.1;                  // the plane y = 0.1, solid below
+ *     ground.shapes[0].normal[1] = 1;
+ *     sm_shape column = sm_shape_default(SM_SHAPE_CYLINDER); // axis along y
+ *     column.center[0] = column.center[2] = 0.5;
+ *     column.center[1] = 0.25;
+ *     column.radius = 0.08;
+ *     column.half_height = 0.15;
+ *     sm_seed_def seed = sm_seed_def_default();
+ *     seed.ppc = 8;                                       // particles per cell
+ *     sm_status st = sm_world_add_material(w, &sand, &mat);
+ *     seed.material = mat;
+ *     if (st == SM_OK) st = sm_world_add_collider(w, &ground, NULL);
+ *     if (st == SM_OK) st = sm_world_seed_shape(w, &column, &seed, NULL);
+ *     for (int frame = 1; st == SM_OK && frame <= 12; frame++) {
+ *         st = sm_world_advance(w, frame / 24.0);         // adaptive steps, lands on the frame time
+ *         sm_diagnostics d;
+ *         sm_world_diagnostics(w, &d);
+ *         printf("t = %.3f s: %zu particles, centre of mass y = %.4f m, kinetic energy %.3g J\n", d.time,
+ *                d.particles, d.center_of_mass[1], d.kinetic_energy);
+ *     }
+ *     if (st != SM_OK) fprintf(stderr, "%s: %s\n", sm_status_string(st), sm_world_errmsg(w));
+ *     sm_world_destroy(w);
+ *     return st == SM_OK ? 0 : (int)st;
+ * }
+ * @endcode
  */
 #ifndef SANDMPM_H
 #define SANDMPM_H
@@ -30,6 +72,14 @@
 
 #ifdef __cplusplus
 extern "C" {
+#endif
+
+/** Marks the functions of the public API: the only symbols the shared library exports (the
+ *  library is compiled with hidden default visibility and SM_BUILDING_LIBRARY defined). */
+#if defined(SM_BUILDING_LIBRARY) && (defined(__GNUC__) || defined(__clang__))
+#define SM_API __attribute__((visibility("default")))
+#else
+#define SM_API
 #endif
 
 /** Scalar type of the simulation state, chosen at build time (CMake option SM_DOUBLE). */
@@ -49,13 +99,13 @@ typedef enum sm_status {
 } sm_status;
 
 /** Short name of a status ("ok", "invalid input", ...). Never NULL. */
-const char *sm_status_string(sm_status s);
+SM_API const char *sm_status_string(sm_status s);
 
 /** Library version, "MAJOR.MINOR.PATCH". */
-const char *sm_version(void);
+SM_API const char *sm_version(void);
 
 /** 1 if sm_real is double, 0 if float. */
-int sm_real_is_double(void);
+SM_API int sm_real_is_double(void);
 
 /* ------------------------------------------------------------------------------------------ */
 /* World                                                                                        */
@@ -124,28 +174,36 @@ typedef struct sm_world_def {
 } sm_world_def;
 
 /** Defaults as documented on each field. */
-sm_world_def sm_world_def_default(void);
+SM_API sm_world_def sm_world_def_default(void);
+
+/** Most cells along one axis of the domain (the grid's block keys hold 21 bits per axis). */
+#define SM_MAX_CELLS_PER_AXIS 4194304
+
+/** Checks a definition without creating a world: SM_OK, or SM_ERR_INVALID with the reason in err
+ *  (if not NULL, up to errlen bytes), e.g. "dx: must be > 0, got -1". sm_world_create applies the
+ *  same checks; scene loaders call this to report a bad definition before building anything. */
+SM_API sm_status sm_world_def_check(const sm_world_def *def, char *err, size_t errlen);
 
 typedef struct sm_world sm_world;
 
 /** Creates a world. On failure *out is NULL and the status says why (no message object exists
  *  yet, so the reason is also written to err, if err is not NULL, up to errlen bytes). */
-sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, size_t errlen);
+SM_API sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, size_t errlen);
 
 /** Destroys a world. Accepts NULL. */
-void sm_world_destroy(sm_world *w);
+SM_API void sm_world_destroy(sm_world *w);
 
 /** The message of the last failed call on this world ("" if none). */
-const char *sm_world_errmsg(const sm_world *w);
+SM_API const char *sm_world_errmsg(const sm_world *w);
 
 /** Changes the number of threads used by later steps (0 = OpenMP's default). */
-void sm_world_set_threads(sm_world *w, int threads);
+SM_API void sm_world_set_threads(sm_world *w, int threads);
 
 /** The definition the world was created with (domain rounded to whole cells). */
-const sm_world_def *sm_world_get_def(const sm_world *w);
+SM_API const sm_world_def *sm_world_get_def(const sm_world *w);
 
 /** Grid nodes per axis (x, y, z; z = 1 in 2D). */
-void sm_world_grid_size(const sm_world *w, int n[3]);
+SM_API void sm_world_grid_size(const sm_world *w, int n[3]);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Materials                                                                                    */
@@ -167,17 +225,18 @@ typedef struct sm_material_def {
 } sm_material_def;
 
 /** Sand as in most thesis scenes: rho 2200, E 3.537e5, nu 0.3, hardening 35/9/0.2/10. */
-sm_material_def sm_material_def_sand(void);
+SM_API sm_material_def sm_material_def_sand(void);
 /** An elastic solid: rho 1000, E 1e5, nu 0.3. */
-sm_material_def sm_material_def_elastic(void);
+SM_API sm_material_def sm_material_def_elastic(void);
 
-/** Adds a material; returns its id (>= 0) or -1 with a message on bad input. */
-int sm_world_add_material(sm_world *w, const sm_material_def *m);
+/** Adds a material. Returns SM_OK and its id in *id (if id is not NULL), or SM_ERR_INVALID (bad
+ *  definition) / SM_ERR_NOMEM with a message and *id = -1. */
+SM_API sm_status sm_world_add_material(sm_world *w, const sm_material_def *m, int *id);
 
 /** Friction angle in degrees for hardening state q (3.79). */
-double sm_hardening_friction_angle(const sm_material_def *m, double q);
+SM_API double sm_hardening_friction_angle(const sm_material_def *m, double q);
 /** Drucker–Prager alpha for a friction angle in degrees (3.80): sqrt(2/3) 2 sin(phi)/(3 - sin(phi)). */
-double sm_alpha_from_friction_angle(double degrees);
+SM_API double sm_alpha_from_friction_angle(double degrees);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Shapes: signed distance functions, negative inside.                                          */
@@ -202,10 +261,10 @@ typedef struct sm_shape {
 } sm_shape;
 
 /** A shape with identity rotation and everything else zero. */
-sm_shape sm_shape_default(sm_shape_kind kind);
+SM_API sm_shape sm_shape_default(sm_shape_kind kind);
 
 /** Signed distance of a shape at point x (3 components), with its unit gradient if grad != NULL. */
-double sm_shape_distance(const sm_shape *s, int dim, const double x[3], double grad[3]);
+SM_API double sm_shape_distance(const sm_shape *s, int dim, const double x[3], double grad[3]);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Particles                                                                                    */
@@ -226,15 +285,15 @@ typedef struct sm_seed_def {
     const sm_shape *clip;   /**< optional second shape: only points inside both are kept */
 } sm_seed_def;
 
-sm_seed_def sm_seed_def_default(void);
+SM_API sm_seed_def sm_seed_def_default(void);
 
 /** Fills a shape (its interior, clipped to the domain) with particles. Returns the number added
  *  in *added (if not NULL). A half-space or inside-out shape fills the whole domain part it covers. */
-sm_status sm_world_seed_shape(sm_world *w, const sm_shape *shape, const sm_seed_def *seed, size_t *added);
+SM_API sm_status sm_world_seed_shape(sm_world *w, const sm_shape *shape, const sm_seed_def *seed, size_t *added);
 
 /** Adds n particles at given positions (3n values) with given velocities (3n values, or NULL for
  *  rest), undeformed, each with volume V0 = dx^d/ppc. Used by emitters and tests. */
-sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions, const double *velocities,
+SM_API sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions, const double *velocities,
                                  int material, double ppc);
 
 /** Read-only view of the particle arrays (structure of arrays, n particles, d = dim). */
@@ -251,38 +310,38 @@ typedef struct sm_particles_view {
     const uint16_t *material; /**< material id, n */
 } sm_particles_view;
 
-void sm_world_particles(const sm_world *w, sm_particles_view *out);
+SM_API void sm_world_particles(const sm_world *w, sm_particles_view *out);
 
 /** Mass of particle i in kg (its material's density times vol0; not stored per particle);
  *  0 if i is out of range. */
-double sm_world_particle_mass(const sm_world *w, size_t i);
+SM_API double sm_world_particle_mass(const sm_world *w, size_t i);
 
 /** Writable velocity access (e.g. to give an object a kick); n*d values. */
-sm_real *sm_world_particle_velocities(sm_world *w);
+SM_API sm_real *sm_world_particle_velocities(sm_world *w);
 
 /** Friction angle in degrees of particle i (from its material and q). */
-double sm_world_particle_friction_angle(const sm_world *w, size_t i);
+SM_API double sm_world_particle_friction_angle(const sm_world *w, size_t i);
 
 /** Estimated volume (m^3, or m^2 in 2D) of shape ∩ clip ∩ [lo, hi] by sampling a 64^d lattice of
  *  its bounding box; used to estimate particle counts (volume * ppc / dx^d) before seeding. */
-double sm_shape_volume_estimate(const sm_shape *shape, const sm_shape *clip, int dim, const double lo[3],
+SM_API double sm_shape_volume_estimate(const sm_shape *shape, const sm_shape *clip, int dim, const double lo[3],
                                 const double hi[3]);
 
 /** Bytes per particle held by the library (state, per-step scratch and the sparse grid's share),
  *  for memory estimates. */
-size_t sm_particle_bytes(int dim);
+SM_API size_t sm_particle_bytes(int dim);
 
 /** Bytes a world created from def needs besides what its particles cost (the grid is sparse and
  *  grows with the particles; see sm_particle_bytes); 0 if def is invalid. */
-size_t sm_world_def_grid_bytes(const sm_world_def *def);
+SM_API size_t sm_world_def_grid_bytes(const sm_world_def *def);
 
 /** Bytes of heap memory the world holds now: particle storage (by capacity), the grid's live
  *  blocks and lookup tables, sort and step scratch, colliders, emitters, implicit workspace. */
-size_t sm_world_memory_bytes(const sm_world *w);
+SM_API size_t sm_world_memory_bytes(const sm_world *w);
 
 /** Number of heap allocations (malloc, calloc, realloc) the library has made in this process,
  *  all worlds together. Constant across steps once a simulation has reached its steady state. */
-uint64_t sm_allocation_count(void);
+SM_API uint64_t sm_allocation_count(void);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Emitters                                                                                     */
@@ -300,14 +359,15 @@ typedef struct sm_emitter_def {
     uint64_t seed;        /**< RNG seed */
 } sm_emitter_def;
 
-sm_emitter_def sm_emitter_def_default(void);
+SM_API sm_emitter_def sm_emitter_def_default(void);
 
-/** Adds an emitter; returns its id (>= 0) or -1 with a message. Emitters run at the end of each
+/** Adds an emitter. Returns SM_OK and its id in *id (if not NULL), or a status with a message and
+ *  *id = -1. Emitters run at the end of each
  *  step (after plasticity), adding the mass that flowed during the step (fractions carry over). */
-int sm_world_add_emitter(sm_world *w, const sm_emitter_def *e);
+SM_API sm_status sm_world_add_emitter(sm_world *w, const sm_emitter_def *e, int *id);
 
 /** Total mass emitted so far by emitter id (kg). */
-double sm_world_emitted_mass(const sm_world *w, int id);
+SM_API double sm_world_emitted_mass(const sm_world *w, int id);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Colliders                                                                                    */
@@ -337,20 +397,21 @@ typedef struct sm_collider_def {
     void *motion_user;
 } sm_collider_def;
 
-sm_collider_def sm_collider_def_default(void);
+SM_API sm_collider_def sm_collider_def_default(void);
 
-/** Adds a collider; returns its id (>= 0) or -1 with a message. */
-int sm_world_add_collider(sm_world *w, const sm_collider_def *c);
+/** Adds a collider. Returns SM_OK and its id in *id (if not NULL), or SM_ERR_INVALID / SM_ERR_NOMEM
+ *  with a message and *id = -1. */
+SM_API sm_status sm_world_add_collider(sm_world *w, const sm_collider_def *c, int *id);
 
 /** Signed distance of collider id at point x at the current time (gradient optional). */
-double sm_world_collider_distance(const sm_world *w, int id, const double x[3], double grad[3]);
+SM_API double sm_world_collider_distance(const sm_world *w, int id, const double x[3], double grad[3]);
 
 /** Current pose of collider id. */
-void sm_world_collider_pose(const sm_world *w, int id, sm_pose *pose);
+SM_API void sm_world_collider_pose(const sm_world *w, int id, sm_pose *pose);
 
 /** Number of colliders, and the definition collider id was added with (NULL if out of range). */
-int sm_world_collider_count(const sm_world *w);
-const sm_collider_def *sm_world_collider_def(const sm_world *w, int id);
+SM_API int sm_world_collider_count(const sm_world *w);
+SM_API const sm_collider_def *sm_world_collider_def(const sm_world *w, int id);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Time stepping                                                                                */
@@ -368,20 +429,20 @@ typedef enum sm_stage {
 } sm_stage;
 
 /** Name of a stage ("p2g", ...). */
-const char *sm_stage_name(sm_stage s);
+SM_API const char *sm_stage_name(sm_stage s);
 
 /** The next time step the world would take, capped so it does not pass t_end (s). */
-double sm_world_next_dt(sm_world *w, double t_end);
+SM_API double sm_world_next_dt(sm_world *w, double t_end);
 
 /** One step of size dt (> 0, s). Returns SM_ERR_NUMERICAL with a message naming the step and
  *  particle if the state becomes NaN/Inf; the state is then the last good one. */
-sm_status sm_world_step(sm_world *w, double dt);
+SM_API sm_status sm_world_step(sm_world *w, double dt);
 
 /** Adaptive steps until the world's time equals t_end exactly. */
-sm_status sm_world_advance(sm_world *w, double t_end);
+SM_API sm_status sm_world_advance(sm_world *w, double t_end);
 
 /** Simulated time, s. */
-double sm_world_time(const sm_world *w);
+SM_API double sm_world_time(const sm_world *w);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Diagnostics                                                                                  */
@@ -410,13 +471,13 @@ typedef struct sm_diagnostics {
 } sm_diagnostics;
 
 /** Computes the diagnostics (O(n)). */
-void sm_world_diagnostics(const sm_world *w, sm_diagnostics *out);
+SM_API void sm_world_diagnostics(const sm_world *w, sm_diagnostics *out);
 
 /** Resets min_dt/max_dt tracking (e.g. at each frame). */
-void sm_world_reset_step_stats(sm_world *w);
+SM_API void sm_world_reset_step_stats(sm_world *w);
 
 /** A 64-bit hash of all particle state (bitwise), for determinism checks. */
-uint64_t sm_world_state_hash(const sm_world *w);
+SM_API uint64_t sm_world_state_hash(const sm_world *w);
 
 #ifdef __cplusplus
 }

@@ -45,29 +45,30 @@ static int emitter_bounds(const sm_shape *s, int dim, const double lo[3], const 
     return 1;
 }
 
-int sm_world_add_emitter(sm_world *w, const sm_emitter_def *e) {
-    if (!e) return (sm_world_fail(w, SM_ERR_INVALID, "emitter definition is NULL"), -1);
+sm_status sm_world_add_emitter(sm_world *w, const sm_emitter_def *e, int *id) {
+    if (id) *id = -1;
+    if (!e) return sm_world_fail(w, SM_ERR_INVALID, "emitter definition is NULL");
     if (e->material < 0 || e->material >= w->nmats)
-        return (sm_world_fail(w, SM_ERR_INVALID, "emitter material: unknown id %d (%d defined)", e->material, w->nmats), -1);
-    if (!(e->ppc > 0) || !isfinite(e->ppc)) return (sm_world_fail(w, SM_ERR_INVALID, "emitter ppc: must be > 0, got %g", e->ppc), -1);
-    if (!(e->rate > 0) || !isfinite(e->rate)) return (sm_world_fail(w, SM_ERR_INVALID, "emitter rate: must be > 0, got %g", e->rate), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "emitter material: unknown id %d (%d defined)", e->material, w->nmats);
+    if (!(e->ppc > 0) || !isfinite(e->ppc)) return sm_world_fail(w, SM_ERR_INVALID, "emitter ppc: must be > 0, got %g", e->ppc);
+    if (!(e->rate > 0) || !isfinite(e->rate)) return sm_world_fail(w, SM_ERR_INVALID, "emitter rate: must be > 0, got %g", e->rate);
     if (!isfinite(e->start) || !(e->stop > e->start))
-        return (sm_world_fail(w, SM_ERR_INVALID, "emitter: need a finite start and stop > start, got %g .. %g", e->start, e->stop), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "emitter: need a finite start and stop > start, got %g .. %g", e->start, e->stop);
     for (int a = 0; a < 3; a++)
-        if (!isfinite(e->velocity[a])) return (sm_world_fail(w, SM_ERR_INVALID, "emitter velocity: must be finite"), -1);
+        if (!isfinite(e->velocity[a])) return sm_world_fail(w, SM_ERR_INVALID, "emitter velocity: must be finite");
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}, bmin[3], bmax[3];
     for (int a = 0; a < w->dim; a++) {
         lo[a] = w->def.domain_min[a] + 2 * w->def.dx;
         hi[a] = w->def.domain_max[a] - 2 * w->def.dx;
     }
     if (!emitter_bounds(&e->shape, w->dim, lo, hi, bmin, bmax))
-        return (sm_world_fail(w, SM_ERR_INVALID, "emitter shape: must be a sphere, box or cylinder (not inside-out) inside the domain"), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "emitter shape: must be a sphere, box or cylinder (not inside-out) inside the domain");
     if (!(sm_shape_volume_estimate(&e->shape, NULL, w->dim, lo, hi) > 0))
-        return (sm_world_fail(w, SM_ERR_INVALID, "emitter shape: has no volume inside the usable domain"), -1);
+        return sm_world_fail(w, SM_ERR_INVALID, "emitter shape: has no volume inside the usable domain");
     if (w->nemitters == w->emitters_cap) {
         int cap = w->emitters_cap ? 2 * w->emitters_cap : 4;
         sm_emitter *q = sm_realloc(w->emitters, (size_t)cap * sizeof *q);
-        if (!q) return (sm_world_fail(w, SM_ERR_NOMEM, "out of memory"), -1);
+        if (!q) return sm_world_fail(w, SM_ERR_NOMEM, "out of memory");
         w->emitters = q;
         w->emitters_cap = cap;
     }
@@ -77,7 +78,9 @@ int sm_world_add_emitter(sm_world *w, const sm_emitter_def *e) {
     memcpy(em->bmin, bmin, sizeof bmin);
     memcpy(em->bmax, bmax, sizeof bmax);
     em->particle_mass = pow(w->def.dx, w->dim) / e->ppc * w->mats[e->material].def.density;
-    return w->nemitters++;
+    if (id) *id = w->nemitters;
+    w->nemitters++;
+    return SM_OK;
 }
 
 double sm_world_emitted_mass(const sm_world *w, int id) {

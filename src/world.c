@@ -301,31 +301,52 @@ double sm_hardening_friction_angle(const sm_material_def *m, double q) {
 
 double sm_alpha_from_friction_angle(double degrees) { return sm_dp_alpha(degrees * DEG); }
 
-sm_status sm_world_add_material(sm_world *w, const sm_material_def *m, int *id) {
-    if (id) *id = -1;
-    if (!m) return sm_world_fail(w, SM_ERR_INVALID, "material definition is NULL");
+/* Writes a message into err (if not NULL) and returns SM_ERR_INVALID: the definition checks. */
+static sm_status check_fail(char *err, size_t errlen, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static sm_status check_fail(char *err, size_t errlen, const char *fmt, ...) {
+    if (err && errlen) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, errlen, fmt, ap);
+        va_end(ap);
+    }
+    return SM_ERR_INVALID;
+}
+
+sm_status sm_material_def_check(const sm_material_def *m, char *err, size_t errlen) {
+    if (!m) return check_fail(err, errlen, "material definition is NULL");
     if (m->kind != SM_MATERIAL_SAND && m->kind != SM_MATERIAL_ELASTIC)
-        return sm_world_fail(w, SM_ERR_INVALID, "material kind: unknown value %d", (int)m->kind);
+        return check_fail(err, errlen, "material kind: unknown value %d", (int)m->kind);
     if (!(m->density > 0) || !isfinite(m->density))
-        return sm_world_fail(w, SM_ERR_INVALID, "density: must be > 0, got %g", m->density);
+        return check_fail(err, errlen, "density: must be > 0, got %g", m->density);
     if (!(m->youngs_modulus > 0) || !isfinite(m->youngs_modulus))
-        return sm_world_fail(w, SM_ERR_INVALID, "E: must be > 0, got %g", m->youngs_modulus);
+        return check_fail(err, errlen, "E: must be > 0, got %g", m->youngs_modulus);
     if (!(m->poisson_ratio > -1 && m->poisson_ratio < 0.5))
-        return sm_world_fail(w, SM_ERR_INVALID, "nu: must be in (-1, 0.5), got %g", m->poisson_ratio);
+        return check_fail(err, errlen, "nu: must be in (-1, 0.5), got %g", m->poisson_ratio);
     if (m->kind == SM_MATERIAL_SAND) {
         if (m->hardening) {
             const double h[4] = {m->h0, m->h1, m->h2, m->h3};
             for (int i = 0; i < 4; i++)
                 if (!isfinite(h[i]) || h[i] < 0)
-                    return sm_world_fail(w, SM_ERR_INVALID, "h%d: must be finite and >= 0, got %g", i, h[i]);
+                    return check_fail(err, errlen, "h%d: must be finite and >= 0, got %g", i, h[i]);
             if (!(m->h0 > m->h3))
-                return sm_world_fail(w, SM_ERR_INVALID, "hardening: need h0 > h3 (thesis §3.5.3), got h0 = %g, h3 = %g", m->h0, m->h3);
+                return check_fail(err, errlen, "hardening: need h0 > h3 (thesis §3.5.3), got h0 = %g, h3 = %g", m->h0, m->h3);
             if (!(m->h0 < 90) || !(m->h0 + m->h1 < 90 * 4))
-                return sm_world_fail(w, SM_ERR_INVALID, "h0: must be < 90 degrees, got %g", m->h0);
+                return check_fail(err, errlen, "h0: must be < 90 degrees, got %g", m->h0);
         } else if (!(m->friction_angle >= 0 && m->friction_angle < 90)) {
-            return sm_world_fail(w, SM_ERR_INVALID, "friction_angle: must be in [0, 90) degrees, got %g", m->friction_angle);
+            return check_fail(err, errlen, "friction_angle: must be in [0, 90) degrees, got %g", m->friction_angle);
         }
     }
+    return SM_OK;
+}
+
+sm_status sm_world_add_material(sm_world *w, const sm_material_def *m, int *id) {
+    if (id) *id = -1;
+    if (sm_material_def_check(m, w->err, sizeof w->err) != SM_OK) return SM_ERR_INVALID;
     if (w->nmats >= 65535) return sm_world_fail(w, SM_ERR_INVALID, "too many materials (65535)");
     if (w->nmats == w->mats_cap) {
         int cap = w->mats_cap ? 2 * w->mats_cap : 4;
@@ -461,51 +482,57 @@ double sm_world_particle_friction_angle(const sm_world *w, size_t i) {
 /* ------------------------------------------------------------------------------------------ */
 /* Colliders                                                                                    */
 
-static int check_shape(sm_world *w, const sm_shape *s, int idx) {
+static int check_shape(const sm_shape *s, int dim, int idx, char *err, size_t errlen) {
     double c3[3] = {s->center[0], s->center[1], s->center[2]};
-    if (!finite3(c3)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].center: must be finite", idx), 0);
+    if (!finite3(c3)) return (check_fail(err, errlen, "shapes[%d].center: must be finite", idx), 0);
     switch (s->kind) {
     case SM_SHAPE_HALFSPACE: {
-        double nn = s->normal[0] * s->normal[0] + s->normal[1] * s->normal[1] + (w->dim == 3 ? s->normal[2] * s->normal[2] : 0);
-        if (!(nn > 0) || !isfinite(nn)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].normal: must be a finite non-zero vector", idx), 0);
+        double nn = s->normal[0] * s->normal[0] + s->normal[1] * s->normal[1] + (dim == 3 ? s->normal[2] * s->normal[2] : 0);
+        if (!(nn > 0) || !isfinite(nn)) return (check_fail(err, errlen, "shapes[%d].normal: must be a finite non-zero vector", idx), 0);
         break;
     }
     case SM_SHAPE_BOX:
-        for (int a = 0; a < w->dim; a++)
+        for (int a = 0; a < dim; a++)
             if (!(s->half_extent[a] > 0) || !isfinite(s->half_extent[a]))
-                return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].half_extent: must be > 0, got %g", idx, s->half_extent[a]), 0);
+                return (check_fail(err, errlen, "shapes[%d].half_extent: must be > 0, got %g", idx, s->half_extent[a]), 0);
         break;
     case SM_SHAPE_SPHERE:
-        if (!(s->radius > 0) || !isfinite(s->radius)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].radius: must be > 0, got %g", idx, s->radius), 0);
+        if (!(s->radius > 0) || !isfinite(s->radius)) return (check_fail(err, errlen, "shapes[%d].radius: must be > 0, got %g", idx, s->radius), 0);
         break;
     case SM_SHAPE_CYLINDER:
-        if (!(s->radius > 0) || !isfinite(s->radius)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].radius: must be > 0, got %g", idx, s->radius), 0);
-        if (!(s->half_height > 0) || !isfinite(s->half_height)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].half_height: must be > 0, got %g", idx, s->half_height), 0);
+        if (!(s->radius > 0) || !isfinite(s->radius)) return (check_fail(err, errlen, "shapes[%d].radius: must be > 0, got %g", idx, s->radius), 0);
+        if (!(s->half_height > 0) || !isfinite(s->half_height)) return (check_fail(err, errlen, "shapes[%d].half_height: must be > 0, got %g", idx, s->half_height), 0);
         break;
-    default: return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].kind: unknown value %d", idx, (int)s->kind), 0);
+    default: return (check_fail(err, errlen, "shapes[%d].kind: unknown value %d", idx, (int)s->kind), 0);
     }
     double qn = 0;
     for (int k = 0; k < 4; k++) qn += s->rotation[k] * s->rotation[k];
-    if (!(fabs(qn - 1) < 1e-6)) return (sm_world_fail(w, SM_ERR_INVALID, "shapes[%d].rotation: must be a unit quaternion (|q|^2 = %g)", idx, qn), 0);
+    if (!(fabs(qn - 1) < 1e-6)) return (check_fail(err, errlen, "shapes[%d].rotation: must be a unit quaternion (|q|^2 = %g)", idx, qn), 0);
     return 1;
+}
+
+sm_status sm_collider_def_check(const sm_collider_def *c, int dim, char *err, size_t errlen) {
+    if (!c) return check_fail(err, errlen, "collider definition is NULL");
+    if (dim != 2 && dim != 3) return check_fail(err, errlen, "collider check: dim must be 2 or 3, got %d", dim);
+    if (c->shape_count < 1 || c->shape_count > SM_MAX_COLLIDER_SHAPES)
+        return check_fail(err, errlen, "collider shapes: need 1 to %d, got %d", SM_MAX_COLLIDER_SHAPES, c->shape_count);
+    for (int i = 0; i < c->shape_count; i++)
+        if (!check_shape(&c->shapes[i], dim, i, err, errlen)) return SM_ERR_INVALID;
+    if (c->mode != SM_COLLIDE_STICKY && c->mode != SM_COLLIDE_SLIP && c->mode != SM_COLLIDE_SEPARATE)
+        return check_fail(err, errlen, "collider mode: unknown value %d", (int)c->mode);
+    if (!(c->friction >= 0) || !isfinite(c->friction))
+        return check_fail(err, errlen, "collider friction: must be >= 0, got %g", c->friction);
+    if (!finite3(c->velocity) || !finite3(c->angular_velocity) || !finite3(c->pose.position))
+        return check_fail(err, errlen, "collider motion: velocity, angular velocity and position must be finite");
+    double qn = 0;
+    for (int k = 0; k < 4; k++) qn += c->pose.rotation[k] * c->pose.rotation[k];
+    if (!(fabs(qn - 1) < 1e-6)) return check_fail(err, errlen, "collider pose.rotation: must be a unit quaternion");
+    return SM_OK;
 }
 
 sm_status sm_world_add_collider(sm_world *w, const sm_collider_def *c, int *id) {
     if (id) *id = -1;
-    if (!c) return sm_world_fail(w, SM_ERR_INVALID, "collider definition is NULL");
-    if (c->shape_count < 1 || c->shape_count > SM_MAX_COLLIDER_SHAPES)
-        return sm_world_fail(w, SM_ERR_INVALID, "collider shapes: need 1 to %d, got %d", SM_MAX_COLLIDER_SHAPES, c->shape_count);
-    for (int i = 0; i < c->shape_count; i++)
-        if (!check_shape(w, &c->shapes[i], i)) return SM_ERR_INVALID;
-    if (c->mode != SM_COLLIDE_STICKY && c->mode != SM_COLLIDE_SLIP && c->mode != SM_COLLIDE_SEPARATE)
-        return sm_world_fail(w, SM_ERR_INVALID, "collider mode: unknown value %d", (int)c->mode);
-    if (!(c->friction >= 0) || !isfinite(c->friction))
-        return sm_world_fail(w, SM_ERR_INVALID, "collider friction: must be >= 0, got %g", c->friction);
-    if (!finite3(c->velocity) || !finite3(c->angular_velocity) || !finite3(c->pose.position))
-        return sm_world_fail(w, SM_ERR_INVALID, "collider motion: velocity, angular velocity and position must be finite");
-    double qn = 0;
-    for (int k = 0; k < 4; k++) qn += c->pose.rotation[k] * c->pose.rotation[k];
-    if (!(fabs(qn - 1) < 1e-6)) return sm_world_fail(w, SM_ERR_INVALID, "collider pose.rotation: must be a unit quaternion");
+    if (sm_collider_def_check(c, w->dim, w->err, sizeof w->err) != SM_OK) return SM_ERR_INVALID;
     if (w->ncolliders + w->nwalls + 1 > w->colliders_cap) {
         int cap = 2 * (w->ncolliders + w->nwalls + 1);
         sm_collider *q = sm_realloc(w->colliders, (size_t)cap * sizeof *q);

@@ -229,6 +229,10 @@ SM_API sm_material_def sm_material_def_sand(void);
 /** An elastic solid: rho 1000, E 1e5, nu 0.3. */
 SM_API sm_material_def sm_material_def_elastic(void);
 
+/** Checks a material definition without a world: SM_OK, or SM_ERR_INVALID with the reason in err
+ *  (if not NULL), e.g. "nu: must be in (-1, 0.5), got 0.7". sm_world_add_material applies it. */
+SM_API sm_status sm_material_def_check(const sm_material_def *m, char *err, size_t errlen);
+
 /** Adds a material. Returns SM_OK and its id in *id (if id is not NULL), or SM_ERR_INVALID (bad
  *  definition) / SM_ERR_NOMEM with a message and *id = -1. */
 SM_API sm_status sm_world_add_material(sm_world *w, const sm_material_def *m, int *id);
@@ -398,6 +402,10 @@ typedef struct sm_collider_def {
 } sm_collider_def;
 
 SM_API sm_collider_def sm_collider_def_default(void);
+
+/** Checks a collider definition for a world of dimension dim (2 or 3) without a world: SM_OK, or
+ *  SM_ERR_INVALID with the reason in err (if not NULL). sm_world_add_collider applies it. */
+SM_API sm_status sm_collider_def_check(const sm_collider_def *c, int dim, char *err, size_t errlen);
 
 /** Adds a collider. Returns SM_OK and its id in *id (if not NULL), or SM_ERR_INVALID / SM_ERR_NOMEM
  *  with a message and *id = -1. */

@@ -183,20 +183,15 @@ void sm_bvh_free(sm_bvh *t) {
     memset(t, 0, sizeof *t);
 }
 
-/* 1 if primitive `slot` has no area (3D: |ab x ac| <= 1e-12 max edge^2) or no length (2D). */
+/* 1 if primitive `slot` has no area (3D, sm_triangle_is_flat) or no length (2D). */
 static int prim_is_flat(const sm_bvh *t, size_t slot) {
-    double n[3], w, c[3];
-    prim_moments(t, slot, n, &w, c);
-    double l2 = 0.0;
-    for (int e = 0; e < t->dim; e++) {
-        const double *a = sm_bvh_vertex(t, slot, e), *b = sm_bvh_vertex(t, slot, (e + 1) % t->dim);
-        double d2 = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
-        l2 = fmax(l2, d2);
-    }
-    return t->dim == 3 ? !(2.0 * w > 1e-12 * l2) : !(l2 > 0.0);
+    const double *a = sm_bvh_vertex(t, slot, 0), *b = sm_bvh_vertex(t, slot, 1);
+    if (t->dim == 3) return sm_triangle_is_flat(a, b, sm_bvh_vertex(t, slot, 2));
+    return a[0] == b[0] && a[1] == b[1];
 }
 
 sm_status sm_bvh_build(sm_bvh *t, int dim, const double *verts, size_t nverts, const uint32_t *prims, size_t nprims) {
+    (void)nverts; /* checked by SM_ASSERT below only */
     SM_ASSERT(dim == 2 || dim == 3);
     SM_ASSERT(nprims > 0 && nprims < (size_t)UINT32_MAX / 2);
     memset(t, 0, sizeof *t);
@@ -248,7 +243,7 @@ sm_status sm_bvh_build(sm_bvh *t, int dim, const double *verts, size_t nverts, c
 static double box_dist2(const sm_bvh_node *nd, const double p[3]) {
     double s = 0.0;
     for (int k = 0; k < 3; k++) {
-        double e = fmax(fmax(nd->lo[k] - p[k], 0.0), p[k] - nd->hi[k]);
+        double e = nd->lo[k] - p[k] > 0.0 ? nd->lo[k] - p[k] : p[k] - nd->hi[k] > 0.0 ? p[k] - nd->hi[k] : 0.0;
         s += e * e;
     }
     return s;
@@ -258,10 +253,11 @@ static double box_dist2(const sm_bvh_node *nd, const double p[3]) {
 static void test_prim(const sm_bvh *t, const double p[3], size_t slot, sm_bvh_hit *hit) {
     double q[3], bary[3] = {0, 0, 0}, d2;
     sm_simplex_region region;
-    if (t->dim == 3)
-        d2 = sm_closest_on_triangle(p, sm_bvh_vertex(t, slot, 0), sm_bvh_vertex(t, slot, 1), sm_bvh_vertex(t, slot, 2),
-                                    q, bary, &region);
-    else
+    if (t->dim == 3) {
+        const double *a = sm_bvh_vertex(t, slot, 0), *b = sm_bvh_vertex(t, slot, 1), *c = sm_bvh_vertex(t, slot, 2);
+        d2 = t->flat[slot] ? sm_closest_on_triangle(p, a, b, c, q, bary, &region)
+                           : sm_closest_on_proper_triangle(p, a, b, c, q, bary, &region);
+    } else
         d2 = sm_closest_on_segment(p, sm_bvh_vertex(t, slot, 0), sm_bvh_vertex(t, slot, 1), q, bary, &region);
     if (d2 < hit->d2) {
         hit->d2 = d2;

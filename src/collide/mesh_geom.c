@@ -108,17 +108,29 @@ static sm_simplex_region at_vertex(int k, double bary[3]) {
     return (sm_simplex_region)k;
 }
 
-double sm_closest_on_triangle(const double p[3], const double a[3], const double b[3], const double c[3],
-                              double q[3], double bary[3], sm_simplex_region *region) {
-    double ab[3], ac[3], n[3], ap[3], bp[3], cp[3];
+int sm_triangle_is_flat(const double a[3], const double b[3], const double c[3]) {
+    double ab[3], ac[3], n[3];
     sub3(b, a, ab);
     sub3(c, a, ac);
     cross3(ab, ac, n);
     double l2 = fmax(dot3(ab, ab), fmax(dot3(ac, ac), dist2(b, c)));
-    if (!(dot3(n, n) > 1e-24 * l2 * l2)) {
+    return !(dot3(n, n) > 1e-24 * l2 * l2);
+}
+
+double sm_closest_on_triangle(const double p[3], const double a[3], const double b[3], const double c[3],
+                              double q[3], double bary[3], sm_simplex_region *region) {
+    if (sm_triangle_is_flat(a, b, c)) {
         const double *v[3] = {a, b, c};
         return closest_on_edges(p, v, q, bary, region);
     }
+    return sm_closest_on_proper_triangle(p, a, b, c, q, bary, region);
+}
+
+double sm_closest_on_proper_triangle(const double p[3], const double a[3], const double b[3], const double c[3],
+                                     double q[3], double bary[3], sm_simplex_region *region) {
+    double ab[3], ac[3], ap[3], bp[3], cp[3];
+    sub3(b, a, ab);
+    sub3(c, a, ac);
     sub3(p, a, ap);
     double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
     if (d1 <= 0.0 && d2 <= 0.0) {

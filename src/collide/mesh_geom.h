@@ -22,6 +22,13 @@ typedef enum sm_simplex_region {
 double sm_closest_on_triangle(const double p[3], const double a[3], const double b[3], const double c[3],
                               double q[3], double bary[3], sm_simplex_region *region);
 
+/* 1 if triangle abc has no face: |ab x ac| <= 1e-12 times its longest edge squared. */
+int sm_triangle_is_flat(const double a[3], const double b[3], const double c[3]);
+
+/* sm_closest_on_triangle for a triangle known not to be flat (skips the test). */
+double sm_closest_on_proper_triangle(const double p[3], const double a[3], const double b[3], const double c[3],
+                                     double q[3], double bary[3], sm_simplex_region *region);
+
 /* Closest point q on segment ab to p; bary = (1 - t, t); region V0, V1 or E0. Returns |p - q|^2. */
 double sm_closest_on_segment(const double p[3], const double a[3], const double b[3], double q[3],
                              double bary[2], sm_simplex_region *region);

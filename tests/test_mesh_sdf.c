@@ -157,7 +157,7 @@ static void check_points(const sm_mesh_sdf *f, const field_case *c) {
         hi[k] = f->origin[k] + f->ncells[k] * f->h;
     }
     int in_band = 0;
-    for (int i = 0; i < 4000 && in_band < 400; i++) {
+    for (int i = 0; i < 1500 && in_band < 300; i++) {
         double x[3], g[3];
         rand_in(lo, hi, 3, x);
         double d = brute_sdf(&c->m, x), phi = sm_mesh_sdf_distance(f, x, g);
@@ -207,7 +207,7 @@ static void check_case(field_case *c) {
            c->name, s->elements, c->h, c->band, s->bricks, s->candidate_bricks, s->band_nodes, s->bytes / 1e6,
            s->seconds, s->lipschitz);
     double worst = 0;
-    check_nodes(f, &c->m, 2500, &worst);
+    check_nodes(f, &c->m, 1500, &worst);
     printf("  nodes: worst |phi_i - brute force| = %.2g h\n", worst);
     check_points(f, c);
     CHECK(s->band_nodes > 0 && s->bricks <= s->candidate_bricks && !s->container && s->volume > 0);

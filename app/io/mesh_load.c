@@ -231,7 +231,7 @@ static int dedge_cmp(const void *pa, const void *pb) {
 
 /* Counts open, non-manifold and misoriented edges; first[k] receives a point of the first edge
  * of each kind (midpoint). Returns 0 on allocation failure. */
-static int tri_topology(const sm_mesh_data *m, double first[3][3]) {
+static int tri_topology(sm_mesh_data *m, double first[3][3]) {
     const size_t nt = m->element_count;
     dedge *e = malloc(3 * nt * sizeof *e);
     if (!e) return 0;
@@ -241,7 +241,7 @@ static int tri_topology(const sm_mesh_data *m, double first[3][3]) {
             e[3 * t + (size_t)k] = (dedge){a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a), a < b, (uint32_t)t};
         }
     qsort(e, 3 * nt, sizeof *e, dedge_cmp);
-    sm_mesh_report *r = (sm_mesh_report *)&m->report;
+    sm_mesh_report *r = &m->report;
     for (size_t g = 0; g < 3 * nt;) {
         size_t end = g, fwd = 0;
         for (; end < 3 * nt && e[end].key == e[g].key; end++) fwd += e[end].forward;

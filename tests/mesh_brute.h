@@ -7,8 +7,35 @@
 
 #include <math.h>
 
+#include <stdio.h>
+
 #include "collide/mesh_geom.h"
+#include "collide/mesh_sdf.h"
 #include "mesh_gen.h"
+
+/* The field definition of a test mesh. */
+static inline sm_mesh_sdf_def mesh_field_def(const test_mesh *m, double h, double band, sm_mesh_sign sign, int threads) {
+    sm_mesh_sdf_def d = sm_mesh_sdf_def_default();
+    d.dim = m->dim;
+    d.vertices = m->v;
+    d.vertex_count = m->nv;
+    d.elements = m->e;
+    d.element_count = m->ne;
+    d.spacing = h;
+    d.band = band;
+    d.sign = sign;
+    d.threads = threads;
+    return d;
+}
+
+/* Builds the field of a test mesh; NULL (and the reason on stderr) on failure. */
+static inline sm_mesh_sdf *mesh_field_build(const test_mesh *m, double h, double band, sm_mesh_sign sign, int threads) {
+    sm_mesh_sdf_def d = mesh_field_def(m, h, band, sign, threads);
+    sm_mesh_sdf *f = NULL;
+    char err[256] = "";
+    if (sm_mesh_sdf_build(&d, &f, err, sizeof err) != SM_OK) fprintf(stderr, "mesh field build failed: %s\n", err);
+    return f;
+}
 
 static inline double brute_seg_dist(const double p[3], const double a[3], const double b[3]) {
     double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};

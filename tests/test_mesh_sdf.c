@@ -95,21 +95,8 @@ static void test_bvh(void) {
 }
 
 static sm_mesh_sdf *build(const test_mesh *m, double h, double band, sm_mesh_sign sign, int threads) {
-    sm_mesh_sdf_def d = sm_mesh_sdf_def_default();
-    d.dim = m->dim;
-    d.vertices = m->v;
-    d.vertex_count = m->nv;
-    d.elements = m->e;
-    d.element_count = m->ne;
-    d.spacing = h;
-    d.band = band;
-    d.sign = sign;
-    d.threads = threads;
-    sm_mesh_sdf *f = NULL;
-    char err[256] = "";
-    sm_status st = sm_mesh_sdf_build(&d, &f, err, sizeof err);
-    if (st != SM_OK) fprintf(stderr, "build failed: %s\n", err);
-    CHECK(st == SM_OK && f);
+    sm_mesh_sdf *f = mesh_field_build(m, h, band, sign, threads);
+    CHECK(f != NULL);
     return f;
 }
 

@@ -11,27 +11,9 @@
 
 static unsigned long long rng = 777;
 
-static sm_mesh_sdf_def def_of(const test_mesh *m, double h, double band, sm_mesh_sign sign, int threads) {
-    sm_mesh_sdf_def d = sm_mesh_sdf_def_default();
-    d.dim = m->dim;
-    d.vertices = m->v;
-    d.vertex_count = m->nv;
-    d.elements = m->e;
-    d.element_count = m->ne;
-    d.spacing = h;
-    d.band = band;
-    d.sign = sign;
-    d.threads = threads;
-    return d;
-}
-
 static sm_mesh_sdf *build(const test_mesh *m, double h, double band, sm_mesh_sign sign, int threads) {
-    sm_mesh_sdf_def d = def_of(m, h, band, sign, threads);
-    sm_mesh_sdf *f = NULL;
-    char err[256] = "";
-    sm_status st = sm_mesh_sdf_build(&d, &f, err, sizeof err);
-    if (st != SM_OK) fprintf(stderr, "build failed: %s\n", err);
-    CHECK(st == SM_OK && f);
+    sm_mesh_sdf *f = mesh_field_build(m, h, band, sign, threads);
+    CHECK(f != NULL);
     return f;
 }
 
@@ -298,7 +280,7 @@ static void expect_invalid(const sm_mesh_sdf_def *d, const char *what) {
 static void test_invalid(void) {
     const double c[3] = {0, 0, 0};
     test_mesh m = mesh_l_prism(c, 1.0);
-    sm_mesh_sdf_def d = def_of(&m, 0.1, 0.3, SM_MESH_SIGN_WINDING, 0);
+    sm_mesh_sdf_def d = mesh_field_def(&m, 0.1, 0.3, SM_MESH_SIGN_WINDING, 0);
     d.spacing = 0;
     expect_invalid(&d, "spacing");
     d.spacing = 0.1, d.band = 0.05;

@@ -175,11 +175,8 @@ static void build_far(sm_bvh *t) {
 }
 
 void sm_bvh_free(sm_bvh *t) {
-    free(t->nodes);
-    free(t->far);
-    free(t->pv);
-    free(t->id);
-    free(t->flat);
+    void *owned[] = {t->nodes, t->far, t->pv, t->id, t->flat};
+    for (size_t i = 0; i < sizeof owned / sizeof owned[0]; i++) free(owned[i]);
     memset(t, 0, sizeof *t);
 }
 

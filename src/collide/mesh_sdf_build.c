@@ -33,8 +33,8 @@
  * field's Lipschitz constant (clamped regions have zero gradient and the field is continuous).
  *
  * Parallel build: coarse nodes, candidate tests and bricks are computed in OpenMP loops in which
- * every item is a pure function of its index; the compaction and numbering are serial, and the
- * reductions are integer sums and maxima. The bytes do not depend on the number of threads. */
+ * every item is a pure function of its index; the compaction, numbering, sums and maxima are
+ * serial. The bytes do not depend on the number of threads. */
 #include <stdio.h>
 #include <string.h>
 #ifdef _OPENMP
@@ -317,13 +317,22 @@ static sm_status compute_bricks(build_ctx *C, int threads) {
     }
     for (size_t b = 0, c = 0; b < nt; b++)
         if (cand[b]) list[c++] = b;
-    size_t band_nodes = 0;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : band_nodes)
-    for (long c = 0; c < (long)ncand; c++) {
-        size_t nodes = 0;
-        cand[list[c]] = (unsigned char)(1 + compute_brick(C, list[c], vals + (size_t)c * bn, &nodes));
-        band_nodes += nodes;
+    /* No OpenMP reductions here or below (clang's need a global lock symbol the shared library
+     * would export): per-item results are combined serially. */
+    uint16_t *nodes = sm_malloc((ncand ? ncand : 1) * sizeof *nodes);
+    if (!nodes) {
+        free(cand), free(list), free(vals);
+        return SM_ERR_NOMEM;
     }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (long c = 0; c < (long)ncand; c++) {
+        size_t n = 0;
+        cand[list[c]] = (unsigned char)(1 + compute_brick(C, list[c], vals + (size_t)c * bn, &n));
+        nodes[c] = (uint16_t)n; /* at most 9^3 */
+    }
+    size_t band_nodes = 0;
+    for (size_t c = 0; c < ncand; c++) band_nodes += nodes[c];
+    free(nodes);
     /* Numbering and compaction (serial, table order); unstored positions take the coarse sign. */
     size_t kept = 0;
     for (size_t b = 0, c = 0; b < nt; b++) {
@@ -352,11 +361,14 @@ static sm_status compute_bricks(build_ctx *C, int threads) {
     return SM_OK;
 }
 
+/* The largest per-brick bound; -1 if out of memory. */
 static double field_lipschitz(const struct sm_mesh_sdf *f, int threads) {
-    double worst = 0.0;
-#pragma omp parallel for schedule(static) num_threads(threads) reduction(max : worst)
-    for (long b = 0; b < (long)f->nbricks; b++)
-        worst = fmax(worst, brick_lipschitz(f->bricks + (size_t)b * f->brick_nodes, f->dim, f->inv_h));
+    double *per = sm_malloc((f->nbricks ? f->nbricks : 1) * sizeof(double)), worst = 0.0;
+    if (!per) return -1.0;
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (long b = 0; b < (long)f->nbricks; b++) per[b] = brick_lipschitz(f->bricks + (size_t)b * f->brick_nodes, f->dim, f->inv_h);
+    for (size_t b = 0; b < f->nbricks; b++) worst = fmax(worst, per[b]);
+    free(per);
     return worst;
 }
 
@@ -372,6 +384,7 @@ static sm_status build_field(build_ctx *C, int threads, char *err, size_t errlen
     compute_coarse(C, threads);
     if (compute_bricks(C, threads) != SM_OK) return fail(err, errlen, SM_ERR_NOMEM, "mesh field: out of memory");
     f->stats.lipschitz = field_lipschitz(f, threads);
+    if (f->stats.lipschitz < 0.0) return fail(err, errlen, SM_ERR_NOMEM, "mesh field: out of memory");
     return SM_OK;
 }
 

@@ -3,7 +3,7 @@
 # are already installed are not touched, and apt is not called at all when nothing is missing.
 set -euo pipefail
 
-PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev)
+PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev libassimp-dev)
 
 missing=()
 for p in "${PACKAGES[@]}"; do

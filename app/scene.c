@@ -161,7 +161,7 @@ static sm_status copy_params(sm_scene *s, const sm_scene_param *params, int npar
 static sm_status run_scene(sm_scene *s, const char *name, char *err, size_t errlen) {
     if (!(s->L = sc_sandbox_new(s))) return sc_fail_msg(err, errlen, SM_ERR_NOMEM, "out of memory (Lua state)");
     lua_State *L = s->L;
-    sc_set_budget(s, SCENE_INSN_LIMIT);
+    sc_set_budget(s, sc_scene_limits.scene_insn, sc_scene_limits.scene_time, "the scene file");
     lua_pushcfunction(L, sc_sandbox_init);
     int st = lua_pcall(L, 0, 0, 0);
     if (st == LUA_OK) {
@@ -235,7 +235,7 @@ void sm_scene_destroy(sm_scene *s) {
     if (!s) return;
     sm_world_destroy(s->world);
     if (s->L) {
-        sc_set_budget(s, MOTION_INSN_LIMIT); /* finalizers (__gc) run in lua_close: keep them bounded */
+        sc_set_budget(s, MOTION_INSN_LIMIT, MOTION_TIME_LIMIT, "closing the scene"); /* no scene code runs here (no __gc) */
         lua_close(s->L);
     }
     for (int i = 0; i < s->nmat; i++) free(s->mat_names[i]);

@@ -339,7 +339,7 @@ static const bad_case bad[] = {
     {"return { dx = 0.1,\n" OK3 MAT "  objects = { { shape = { type = 'box', center = {0.5, 0.5, 0.5}, size = {0.1, 0.1, 0.1}, rotation = {1, 1, 0, 0} } } } }\n",
      {"objects[1].shape.rotation: must be a unit quaternion"}},
     {"return { dx = 0.1,\n" OK3 MAT "  objects = { { shape = { type = 'sphere', center = {5, 0.5, 0.5}, radius = 0.1 } } } }\n",
-     {"bad.lua: objects[1].shape: outside the domain along x"}},
+     {"bad.lua:4: objects[1].shape: outside the domain along x"}},
     {"return { dx = 0.1,\n" OK3 MAT OBJ "  colliders = { { shape = { type = 'halfspace', point = {0, 0, 0}, normal = {0, 1, 0} }, mode = 'sticky' },\n"
      "    { shape = { type = 'halfspace', point = {0, 0, 0}, normal = {0, 1, 0} }, mode = 'slip', frction = 0.3 } } }\n",
      {"bad.lua:6: colliders[2].frction: unknown key (did you mean \"friction\"?)"}},
@@ -377,7 +377,7 @@ static const bad_case bad[] = {
     {"do local x <close> = setmetatable({}, { __close = function() while true do end end }) end\n",
      {"bad.lua:1: instruction limit exceeded"}},
     {"local x <close> = setmetatable({}, { __close = function() while true do end end })\nwhile true do end\n",
-     {"bad.lua:1: instruction limit exceeded"}},
+     {"bad.lua:2: instruction limit exceeded"}}, /* the loop that ran out; the __close cannot replace it */
     {"local s = string.rep('x', 300000000)\n", {"bad.lua: memory limit exceeded"}},
     {"local t = {}\nfor i = 1, 1e9 do t[i] = string.rep('x', 1000) .. i end\n", {"bad.lua: memory limit exceeded"}},
     {"local f = io.open('/etc/passwd')\n", {"bad.lua:1: io is not available in scene files"}},

@@ -158,7 +158,7 @@ void sc_scene_motion(void *user, double t, sm_pose *pose) {
         return;
     }
     lua_State *L = s->L;
-    sc_set_budget(s, MOTION_INSN_LIMIT);
+    sc_set_budget(s, sc_scene_limits.motion_insn, sc_scene_limits.motion_time, "a motion-function call");
     int top = lua_gettop(L);
     lua_pushcfunction(L, sc_motion_call);
     lua_pushlightuserdata(L, c);

@@ -64,6 +64,11 @@ static double parse_world_numbers(vctx *v, int top) {
     d->gmres_tolerance = sc_num_field(v, top, "gmres_tolerance", d->gmres_tolerance, NULL, SC_NOLIM);
     sc_vec_field(v, top, "gravity", d->gravity);
     if (d->dim == 2) d->gravity[2] = 0;
+    double g = sqrt(d->gravity[0] * d->gravity[0] + d->gravity[1] * d->gravity[1] + d->gravity[2] * d->gravity[2]);
+    if (g > SCENE_MAX_GRAVITY) {
+        sc_push_key(v, "gravity");
+        sc_fail(v, "|g| = %g m/s^2 is more than %g m/s^2 (about 1000 g): a typo?", g, SCENE_MAX_GRAVITY);
+    }
     d->static_friction_sticks = sc_bool_field(v, top, "static_friction_sticks", d->static_friction_sticks);
     d->particle_projection = sc_bool_field(v, top, "particle_projection", d->particle_projection);
     return ppc;
@@ -145,7 +150,18 @@ static void parse_camera(vctx *v, int top) {
         uu += set->up[a] * set->up[a];
     }
     if (!(dd > 0)) sc_fail(v, "eye and target must differ");
-    if (!(uu > 0)) sc_fail(v, "up: must be non-zero");
+    size_t o_up = sc_push_key(v, "up");
+    if (!(uu > 0)) sc_fail(v, "must be non-zero");
+    double f[3], cr[3];
+    for (int a = 0; a < 3; a++) f[a] = set->target[a] - set->eye[a];
+    cr[0] = f[1] * set->up[2] - f[2] * set->up[1];
+    cr[1] = f[2] * set->up[0] - f[0] * set->up[2];
+    cr[2] = f[0] * set->up[1] - f[1] * set->up[0];
+    if (!(sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]) > 1e-6 * sqrt(dd * uu)))
+        sc_fail(v, "parallel to the view direction (target - eye = {%g, %g, %g}): the camera's roll is undefined; "
+                   "give an up vector across the view",
+                f[0], f[1], f[2]);
+    sc_pop_key(v, o_up);
     set->fov = sc_num_field(v, ct, "fov", 40, NULL, 0.0, 0, 180.0, 0);
     set->has_camera = 1;
     lua_pop(L, 1);

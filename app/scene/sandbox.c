@@ -1,11 +1,33 @@
-/* The scene sandbox: a fresh lua_State per scene with a counting allocator (the memory limit), a
- * count hook (the instruction limit), only the safe libraries, and the globals scenes may use
- * (params, axis_angle, print). See app/scene.h for the limits. */
+/* The scene sandbox: a fresh lua_State per scene with
+ *   - a counting allocator: the memory limit (SCENE_MEM_LIMIT, 256 MB of Lua memory);
+ *   - a budget of work: the count hook adds HOOK_STEP every HOOK_STEP Lua instructions, and the
+ *     library functions that can work long inside one call (string.rep, the pattern functions,
+ *     table.sort/concat/move/insert/remove/unpack, print, string.format/upper/lower/reverse) add
+ *     what the call costs (bounded.c, pattern.c) through sc_charge;
+ *   - a time limit beside it, checked by the same hook and charges every CLOCK_EVERY units of
+ *     work: CPU seconds of the calling thread (wall-clock time would make the limit depend on the
+ *     machine's load: on a loaded 2-core machine a scene took 10.3 s of wall clock for 1.2 s of
+ *     CPU), and WALL_FACTOR times as many seconds of wall clock (a scene blocked outside the CPU,
+ *     e.g. printing into a full pipe);
+ *   - only the safe libraries (base without dofile/loadfile/load, math, string without dump,
+ *     pack and unpack, table, utf8; no io, os, package, debug, coroutine), the string metatable
+ *     hidden from getmetatable, setmetatable without __gc, collectgarbage("count"/"collect") only.
+ *
+ * Why a limit cannot be caught. When the budget or the clock runs out, the scene is "tripped":
+ * the hook then runs at every instruction and raises the limit's message each time, and the only
+ * functions that catch errors, pcall and xpcall, are replaced by versions that re-raise the limit's
+ * message once the scene is tripped. xpcall's message handler would run inside the hook (where Lua
+ * disables hooks, so an endless handler could never be stopped): the replacement wraps the
+ * handler in a guard that returns the message untouched, without calling the scene's handler, once
+ * the scene is tripped. Finalizers (__gc) run with hooks off too, so setmetatable refuses them; to-be-
+ * closed variables' __close run with hooks on and fail at their first instruction. So after a trip
+ * no scene code runs more than one instruction, and the error reaches the loader's lua_pcall. */
 #define _POSIX_C_SOURCE 200809L
 #include <ctype.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <lua5.4/lauxlib.h>
 #include <lua5.4/lua.h>
@@ -13,9 +35,29 @@
 
 #include "app/scene/scene_internal.h"
 
-#define HOOK_STEP 1000 /* the count hook runs every HOOK_STEP instructions */
+#define HOOK_STEP 1000    /* the count hook runs every HOOK_STEP instructions */
+#define CLOCK_EVERY 16000 /* units of work between two looks at the clocks */
+#define WALL_FACTOR 10    /* wall-clock limit = WALL_FACTOR x the CPU-time limit */
+
+sc_limits sc_scene_limits = {SCENE_INSN_LIMIT, MOTION_INSN_LIMIT, SCENE_TIME_LIMIT, MOTION_TIME_LIMIT};
 
 sm_scene *sc_scene_of(lua_State *L) { return *(sm_scene **)lua_getextraspace(L); }
+
+static double clock_seconds(clockid_t id) {
+    struct timespec ts;
+    if (clock_gettime(id, &ts) != 0) return 0;
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* 0 while the budget's time lasts, else 1 (CPU time) or 2 (wall clock); looks at the clocks only
+ * every CLOCK_EVERY units of work. */
+static int out_of_time(sm_scene *s) {
+    if (s->insn < s->next_clock) return 0;
+    s->next_clock = s->insn + CLOCK_EVERY;
+    if (clock_seconds(CLOCK_THREAD_CPUTIME_ID) - s->cpu_start > s->time_limit) return 1;
+    if (clock_seconds(CLOCK_MONOTONIC) - s->wall_start > WALL_FACTOR * s->time_limit) return 2;
+    return 0;
+}
 
 static void *scene_alloc(void *ud, void *ptr, size_t osize, size_t nsize) {
     sm_scene *s = ud;
@@ -35,77 +77,141 @@ static void *scene_alloc(void *ud, void *ptr, size_t osize, size_t nsize) {
     return q;
 }
 
+static void insn_hook(lua_State *L, lua_Debug *ar);
+
+/* Marks the scene tripped with msg (prefixed by where, the position of the scene code that ran
+ * into the limit) and raises it; every later instruction raises it again. */
+static void trip(lua_State *L, sm_scene *s, const char *where, const char *msg) {
+    if (!s->tripped) {
+        s->tripped = 1;
+        snprintf(s->trip_msg, sizeof s->trip_msg, "%s%s", where, msg);
+        lua_sethook(L, insn_hook, LUA_MASKCOUNT, 1);
+    }
+    lua_pushstring(L, s->trip_msg);
+    lua_error(L);
+}
+
+static void over_time(lua_State *L, sm_scene *s, const char *where, int which) {
+    char msg[256];
+    snprintf(msg, sizeof msg, "time limit exceeded (%g s of %s for %s): an endless loop or too much work?",
+             which == 1 ? s->time_limit : WALL_FACTOR * s->time_limit, which == 1 ? "CPU time" : "wall-clock time",
+             s->budget_what);
+    trip(L, s, where, msg);
+}
+
 static void insn_hook(lua_State *L, lua_Debug *ar) {
     (void)ar;
     sm_scene *s = sc_scene_of(L);
+    if (s->tripped) trip(L, s, "", "");
     s->insn += HOOK_STEP;
-    if (s->insn > s->insn_limit) {
-        /* From now on every instruction fails, so a pcall in the script cannot swallow this. */
-        lua_sethook(L, insn_hook, LUA_MASKCOUNT, 1);
-        luaL_where(L, 0); /* in a hook, level 0 is the interrupted function */
-        lua_pushfstring(L, "instruction limit exceeded (%d million Lua instructions): an endless loop?",
-                        (int)(s->insn_limit / 1000000));
-        lua_concat(L, 2);
-        lua_error(L);
-    }
+    int late = s->insn <= s->insn_limit ? out_of_time(s) : 0;
+    if (s->insn <= s->insn_limit && !late) return;
+    luaL_where(L, 0); /* in a hook, level 0 is the interrupted function */
+    const char *where = lua_tostring(L, -1);
+    if (late) over_time(L, s, where, late);
+    char msg[160];
+    snprintf(msg, sizeof msg, "instruction limit exceeded (%d million Lua instructions): an endless loop?",
+             (int)(s->insn_limit / 1000000));
+    trip(L, s, where, msg);
 }
 
-void sc_set_budget(sm_scene *s, long long limit) {
+void sc_charge(lua_State *L, const char *what, long long cost) {
+    sm_scene *s = sc_scene_of(L);
+    if (s->tripped) trip(L, s, "", "");
+    if (cost < 0) cost = 0;
+    int over = cost > s->insn_limit - s->insn;
+    s->insn = over ? s->insn_limit + 1 : s->insn + cost;
+    int late = over ? 0 : out_of_time(s);
+    if (!over && !late) return;
+    luaL_where(L, 1); /* the scene code that called the library function */
+    const char *where = lua_tostring(L, -1);
+    if (late) over_time(L, s, where, late);
+    char msg[256];
+    snprintf(msg, sizeof msg,
+             "%s: instruction limit exceeded (%d million Lua instructions; this call alone would count as %.3g): too "
+             "much work for a scene",
+             what, (int)(s->insn_limit / 1000000), (double)cost);
+    trip(L, s, where, msg);
+}
+
+void sc_set_budget(sm_scene *s, long long limit, double seconds, const char *what) {
     s->insn = 0;
+    s->next_clock = CLOCK_EVERY;
     s->insn_limit = limit;
+    s->time_limit = seconds;
+    s->budget_what = what;
+    s->cpu_start = clock_seconds(CLOCK_THREAD_CPUTIME_ID);
+    s->wall_start = clock_seconds(CLOCK_MONOTONIC);
+    s->tripped = 0;
+    s->trip_msg[0] = 0;
     lua_sethook(s->L, insn_hook, LUA_MASKCOUNT, HOOK_STEP);
 }
 
-static void mark_param_used(sm_scene *s, const char *key) {
-    for (int i = 0; i < s->nparams; i++)
-        if (!strcmp(s->params[i].key, key)) {
-            s->params[i].used = 1;
-            return;
-        }
-    for (int i = 0; i < s->nread; i++)
-        if (!strcmp(s->read_keys[i], key)) return;
-    if (s->nread == s->read_cap) {
-        if (s->read_cap >= 4096) return;
-        int cap = s->read_cap ? 2 * s->read_cap : 16;
-        char **q = realloc(s->read_keys, (size_t)cap * sizeof *q);
-        if (!q) return;
-        s->read_keys = q;
-        s->read_cap = cap;
-    }
-    if ((s->read_keys[s->nread] = sc_dup_str(key)) != NULL) s->nread++;
-}
-
-/* params: an empty proxy whose metatable records which keys the scene reads. */
-static int params_index(lua_State *L) {
-    if (lua_type(L, 2) == LUA_TSTRING) mark_param_used(sc_scene_of(L), lua_tostring(L, 2));
-    lua_pushvalue(L, 2);
-    lua_rawget(L, lua_upvalueindex(1));
-    return 1;
-}
-
-static int params_newindex(lua_State *L) {
-    lua_settop(L, 3);
-    lua_pushvalue(L, 2);
-    lua_pushvalue(L, 3);
-    lua_rawset(L, lua_upvalueindex(1));
-    return 0;
-}
-
-static int params_next(lua_State *L) {
-    luaL_checktype(L, 1, LUA_TTABLE);
-    lua_settop(L, 2);
-    if (lua_next(L, 1)) return 2;
-    lua_pushnil(L);
-    return 1;
-}
-
-static int params_pairs(lua_State *L) {
+/* After a protected call failed: the limit's message again if the scene is tripped. */
+static void reraise_if_tripped(lua_State *L) {
     sm_scene *s = sc_scene_of(L);
-    for (int i = 0; i < s->nparams; i++) s->params[i].used = 1;
-    lua_pushcfunction(L, params_next);
+    if (s->tripped) trip(L, s, "", "");
+}
+
+static int scene_pcall(lua_State *L) { /* pcall(f, ...) -> true, results | false, message */
+    luaL_checkany(L, 1);
+    int st = lua_pcall(L, lua_gettop(L) - 1, LUA_MULTRET, 0);
+    if (st != LUA_OK) {
+        reraise_if_tripped(L);
+        lua_pushboolean(L, 0);
+        lua_insert(L, -2);
+        return 2;
+    }
+    lua_pushboolean(L, 1);
+    lua_insert(L, 1);
+    return lua_gettop(L);
+}
+
+/* xpcall's message handler, guarded: the scene's handler (upvalue 1) runs only while the scene is
+ * not tripped. */
+static int guarded_handler(lua_State *L) {
+    if (sc_scene_of(L)->tripped) return 1; /* the message as it is */
     lua_pushvalue(L, lua_upvalueindex(1));
-    lua_pushnil(L);
-    return 3;
+    lua_insert(L, 1);
+    lua_call(L, lua_gettop(L) - 1, 1);
+    return 1;
+}
+
+static int scene_xpcall(lua_State *L) { /* xpcall(f, handler, ...) */
+    luaL_checktype(L, 2, LUA_TFUNCTION);
+    int n = lua_gettop(L);
+    lua_pushvalue(L, 2);
+    lua_pushcclosure(L, guarded_handler, 1);
+    lua_replace(L, 2);     /* f, guard, args... */
+    lua_pushvalue(L, 1);   /* f, guard, args..., f */
+    lua_rotate(L, 3, 1);   /* f, guard, f, args... */
+    int st = lua_pcall(L, n - 2, LUA_MULTRET, 2);
+    if (st != LUA_OK) {
+        reraise_if_tripped(L);
+        lua_pushboolean(L, 0);
+        lua_insert(L, -2);
+        return 2;
+    }
+    lua_pushboolean(L, 1);
+    lua_replace(L, 2);
+    return lua_gettop(L) - 1;
+}
+
+/* collectgarbage: only "count" and "collect" (the default); stopping or tuning the collector is
+ * not a scene's business. */
+static int scene_collectgarbage(lua_State *L) {
+    const char *opt = luaL_optstring(L, 1, "collect");
+    if (!strcmp(opt, "count")) {
+        lua_pushnumber(L, (lua_Number)lua_gc(L, LUA_GCCOUNT) + (lua_Number)lua_gc(L, LUA_GCCOUNTB) / 1024);
+        return 1;
+    }
+    if (!strcmp(opt, "collect")) {
+        lua_gc(L, LUA_GCCOLLECT);
+        lua_pushinteger(L, 0);
+        return 1;
+    }
+    return luaL_error(L, "collectgarbage(\"%s\") is not available in scene files (only \"count\" and \"collect\")",
+                      opt);
 }
 
 static const char *const forbidden[] = {"io", "os", "package", "require", "debug", "dofile", "loadfile", "load",
@@ -138,40 +244,31 @@ static int scene_setmetatable(lua_State *L) { /* lbaselib.c's, plus the __gc che
     return 1;
 }
 
-static int forbidden_dump(lua_State *L) {
-    return luaL_error(L, "string.dump is not available in scene files (they run in a sandbox)");
+static int not_available(lua_State *L) {
+    return luaL_error(L, "string.%s is not available in scene files (they run in a sandbox)",
+                      lua_tostring(L, lua_upvalueindex(1)));
 }
 
-static int scene_print(lua_State *L) {
-    int n = lua_gettop(L);
-    for (int i = 1; i <= n; i++) {
-        size_t len;
-        const char *str = luaL_tolstring(L, i, &len);
-        if (i > 1) fputc('\t', stderr);
-        fwrite(str, 1, len, stderr);
-        lua_pop(L, 1);
+/* The string table: dump, pack and unpack removed (binary data is not a scene's business); the
+ * string metatable hidden from getmetatable (scenes cannot change what ("x"):f() calls). */
+static void restrict_strings(lua_State *L) {
+    lua_getglobal(L, LUA_STRLIBNAME);
+    const char *gone[] = {"dump", "pack", "unpack", "packsize"};
+    for (int i = 0; i < 4; i++) {
+        lua_pushstring(L, gone[i]);
+        lua_pushcclosure(L, not_available, 1);
+        lua_setfield(L, -2, gone[i]);
     }
-    fputc('\n', stderr);
-    return 0;
-}
-
-static int lua_axis_angle(lua_State *L) {
-    double q[4];
-    double ax = luaL_checknumber(L, 1), ay = luaL_checknumber(L, 2), az = luaL_checknumber(L, 3),
-           deg = luaL_checknumber(L, 4);
-    if (!sc_quat_axis_angle(ax, ay, az, deg, q))
-        return luaL_error(L, "axis_angle: need a finite non-zero axis and a finite angle");
-    lua_createtable(L, 4, 0);
-    for (int k = 0; k < 4; k++) {
-        lua_pushnumber(L, q[k]);
-        lua_rawseti(L, -2, k + 1);
-    }
-    return 1;
+    lua_pop(L, 1);
+    lua_pushliteral(L, "");
+    lua_getmetatable(L, -1);
+    lua_pushboolean(L, 0);
+    lua_setfield(L, -2, "__metatable");
+    lua_pop(L, 2);
 }
 
 /* Runs protected: opens the allowed libraries and sets up the globals. */
 int sc_sandbox_init(lua_State *L) {
-    sm_scene *s = sc_scene_of(L);
     luaL_requiref(L, LUA_GNAME, luaopen_base, 1);
     luaL_requiref(L, LUA_MATHLIBNAME, luaopen_math, 1);
     luaL_requiref(L, LUA_STRLIBNAME, luaopen_string, 1);
@@ -188,18 +285,14 @@ int sc_sandbox_init(lua_State *L) {
     lua_pushinteger(L, 1);
     lua_call(L, 1, 0);
     lua_pop(L, 1);
-    lua_getglobal(L, LUA_STRLIBNAME);
-    lua_pushcfunction(L, forbidden_dump);
-    lua_setfield(L, -2, "dump");
-    lua_pop(L, 1);
-    lua_pushcfunction(L, scene_print);
-    lua_setglobal(L, "print");
-    lua_pushcfunction(L, scene_setmetatable);
-    lua_setglobal(L, "setmetatable");
-    lua_pushcfunction(L, lua_axis_angle);
-    lua_setglobal(L, "axis_angle");
-    /* _G's metatable: clear messages for the removed libraries. */
+    restrict_strings(L);
+    sc_open_bounded(L);
+    sc_open_patterns(L);
+    const luaL_Reg base[] = {{"setmetatable", scene_setmetatable}, {"pcall", scene_pcall}, {"xpcall", scene_xpcall},
+                             {"collectgarbage", scene_collectgarbage}, {NULL, NULL}};
     lua_pushglobaltable(L);
+    luaL_setfuncs(L, base, 0);
+    /* _G's metatable: clear messages for the removed libraries. */
     lua_createtable(L, 0, 2);
     lua_pushcfunction(L, globals_index);
     lua_setfield(L, -2, "__index");
@@ -207,31 +300,7 @@ int sc_sandbox_init(lua_State *L) {
     lua_setfield(L, -2, "__metatable");
     lua_setmetatable(L, -2);
     lua_pop(L, 1);
-    /* params */
-    lua_newtable(L); /* storage */
-    int storage = lua_gettop(L);
-    lua_pushstring(L, s->quality);
-    lua_setfield(L, storage, "quality");
-    for (int i = 0; i < s->nparams; i++) {
-        const char *v = s->params[i].value;
-        if (!strcmp(v, "true")) lua_pushboolean(L, 1);
-        else if (!strcmp(v, "false")) lua_pushboolean(L, 0);
-        else if (lua_stringtonumber(L, v) == 0) lua_pushstring(L, v);
-        lua_setfield(L, storage, s->params[i].key);
-    }
-    lua_newtable(L); /* proxy */
-    lua_createtable(L, 0, 4);
-    lua_pushvalue(L, storage);
-    lua_pushcclosure(L, params_index, 1);
-    lua_setfield(L, -2, "__index");
-    lua_pushvalue(L, storage);
-    lua_pushcclosure(L, params_newindex, 1);
-    lua_setfield(L, -2, "__newindex");
-    lua_pushvalue(L, storage);
-    lua_pushcclosure(L, params_pairs, 1);
-    lua_setfield(L, -2, "__pairs");
-    lua_setmetatable(L, -2);
-    lua_setglobal(L, "params");
+    sc_open_scene_globals(L);
     lua_settop(L, 0);
     return 0;
 }

@@ -3,15 +3,22 @@
  * Who does what (one job per file):
  *   app/scene.c               the public entry points: load (read, run, validate, estimate), the
  *                             getters, destroy
- *   app/scene/sandbox.c       the Lua state: allocator with its memory limit, the instruction hook,
- *                             the safe libraries, the params table
+ *   app/scene/sandbox.c       the Lua state: allocator with its memory limit, the budget of work
+ *                             (instruction hook, charges, wall clock) that pcall cannot catch, the
+ *                             safe libraries
+ *   app/scene/bounded.c       the library functions that can work long in one call, charged
+ *   app/scene/pattern.c       string.find/match/gmatch/gsub with a matcher that counts its steps
+ *   app/scene/params.c        the scene's globals: params, axis_angle, print
+ *   app/scene/locate.c        the line of a key path in the source (for messages)
  *   app/scene/schema.c        the schema helpers: key paths, messages with file:line and did-you-mean,
  *                             typed fields with ranges, the one list parser, library messages
  *   app/scene/parse_scene.c   the top-level table: world definition, domain, lists, outputs, camera
  *   app/scene/parse_items.c   shapes, materials, objects, colliders, emitters
  *   app/scene/motion.c        quaternions, keyframes, motion functions (the library's sm_motion_fn)
  *   app/scene/estimate.c      checks after validation: objects/emitters against the domain, unused
- *                             --set keys, particle and memory estimates
+ *                             --set keys, particle and memory estimates against available memory,
+ *                             time steps against SCENE_MAX_STEPS
+ *   app/scene/volume.c        exact volumes of shapes inside a box (sampling where exact is impractical)
  *   app/scene/build.c         sm_scene_build: the world from the validated scene
  *
  * Functions shared between these files start with sc_ (the application is one static library:
@@ -27,9 +34,14 @@
 
 #define SCENE_INSN_LIMIT 50000000LL /* Lua instructions for running the scene file */
 #define MOTION_INSN_LIMIT 1000000LL /* per motion-function call */
+#define SCENE_TIME_LIMIT 10.0       /* CPU s for running the scene file (and 10 x as much wall clock) */
+#define MOTION_TIME_LIMIT 0.1       /* CPU s per motion-function call (and 10 x as much wall clock) */
 #define SCENE_MEM_LIMIT ((size_t)256 << 20)
 #define SCENE_MAX_FILE ((long)16 << 20)
 #define SCENE_MAX_LIST 1000000
+#define SCENE_MAX_STEPS 1e8         /* time steps a run may need (estimate.c) */
+#define SCENE_MEMORY_SHARE 0.9      /* of the memory this process can still get */
+#define SCENE_MAX_GRAVITY 1e4       /* m/s^2 (about 1000 g) */
 
 enum { MOTION_RIGID = 0, MOTION_KEYFRAMES = 1, MOTION_FUNCTION = 2 };
 
@@ -65,7 +77,13 @@ struct sm_scene {
     lua_State *L;
     size_t mem, mem_limit;
     int mem_hit;
-    long long insn, insn_limit;
+    long long insn, insn_limit; /* work done and allowed in the current budget (sc_set_budget) */
+    long long next_clock;       /* insn at which to look at the clocks again */
+    double time_limit;          /* CPU seconds (and 10 x as many wall-clock seconds), see sandbox.c */
+    double cpu_start, wall_start; /* when the budget began: thread CPU time, CLOCK_MONOTONIC */
+    const char *budget_what;    /* "the scene file", "a motion-function call" */
+    int tripped;                /* a limit ran out: every instruction raises trip_msg again */
+    char trip_msg[512];
     char path[1024];
     char *source;
     size_t source_len;
@@ -106,7 +124,20 @@ sm_status sc_fail_msg(char *err, size_t errlen, sm_status code, const char *fmt,
 sm_scene *sc_scene_of(lua_State *L);
 lua_State *sc_sandbox_new(sm_scene *s);           /* NULL if out of memory */
 int sc_sandbox_init(lua_State *L);                /* lua_CFunction: libraries, globals, params */
-void sc_set_budget(sm_scene *s, long long limit); /* instruction limit from now on */
+/* The limits in force (tests may lower them); the defaults are the SCENE_ and MOTION_ constants. */
+typedef struct sc_limits {
+    long long scene_insn, motion_insn;
+    double scene_time, motion_time;
+} sc_limits;
+extern sc_limits sc_scene_limits;
+/* A new budget from now on: limit instructions (and charged work) and seconds (CPU time) for what. */
+void sc_set_budget(sm_scene *s, long long limit, double seconds, const char *what);
+/* Adds cost to the budget for the library function what (called by scene code); raises the
+ * limit's error, which pcall cannot catch, when the budget or the clock runs out. */
+void sc_charge(lua_State *L, const char *what, long long cost);
+void sc_open_bounded(lua_State *L);       /* bounded.c: charged string and table functions */
+void sc_open_patterns(lua_State *L);      /* pattern.c: string.find/match/gmatch/gsub */
+void sc_open_scene_globals(lua_State *L); /* params.c: params, axis_angle, print */
 void sc_pop_error(lua_State *L, int status, char *buf, size_t n); /* a failed pcall's message, popped */
 int sc_has_position(const char *msg);             /* starts with Lua's "chunk:line:"? */
 
@@ -185,7 +216,18 @@ int sc_motion_call(lua_State *L); /* lua_CFunction: (collider, t) -> checks the 
 void sc_motion_error_text(const sm_scene *s, const scene_collider *c, double t, const char *msg, char *out, size_t n);
 void sc_scene_motion(void *user, double t, sm_pose *pose); /* the library's sm_motion_fn */
 
-/* ---- after validation (estimate.c) ---- */
+/* ---- after validation (estimate.c, volume.c, locate.c) ---- */
 sm_status sc_finish_load(sm_scene *s, char *err, size_t errlen);
+/* Bytes this process can still allocate (MemAvailable, the room under RLIMIT_AS and RLIMIT_DATA;
+ * INFINITY if none is known), and in why what they are. */
+double sc_available_bytes(char *why, size_t n);
+/* Bounding box of a bounded shape (box, sphere, cylinder; not inside-out); 0 if unbounded. */
+int sc_shape_bbox(const sm_shape *sh, int dim, double lo[3], double hi[3]);
+/* |shape and clip (or NULL) and [lo, hi]| (an area in 2D); dx sets the sampling lattice where the
+ * volume is not exact. */
+double sc_volume_in_box(const sm_shape *shape, const sm_shape *clip, int dim, const double lo[3], const double hi[3],
+                        double dx);
+/* The line of a key path ("objects[2].shape.center") in the source, 0 if not found. */
+int sc_locate(const char *src, size_t n, const char *path);
 
 #endif

@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include <lua5.4/lauxlib.h>
 #include <lua5.4/lua.h>
@@ -186,8 +187,11 @@ void sc_fail(vctx *v, const char *fmt, ...) {
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    last_name(v, name, sizeof name);
-    int line = key_line(v->s->source, name);
+    int line = v->plen ? sc_locate(v->s->source, v->s->source_len, v->path) : 0;
+    if (line <= 0) { /* not found by the constructors' walk: the one line with `name =`, if any */
+        last_name(v, name, sizeof name);
+        line = key_line(v->s->source, name);
+    }
     char where[1100];
     if (line > 0) snprintf(where, sizeof where, "%s:%d", v->s->path, line);
     else snprintf(where, sizeof where, "%s", v->s->path);
@@ -343,6 +347,24 @@ int sc_bool_field(vctx *v, int t, const char *key, int def) {
     return r;
 }
 
+/* Other words for the enum values ({word, value} pairs), for suggestions: "plane" -> "halfspace". */
+static const char *const enum_aliases[] = {
+    "plane", "halfspace", "half_space", "halfspace", "half-space", "halfspace", "ground", "halfspace",
+    "floor", "halfspace", "wall", "halfspace", "cube", "box", "cuboid", "box", "rectangle", "box", "rect", "box",
+    "square", "box", "ball", "sphere", "disk", "sphere", "disc", "sphere", "circle", "sphere", "tube", "cylinder",
+    "rod", "cylinder", "noslip", "sticky", "no-slip", "sticky", "no_slip", "sticky", "stick", "sticky",
+    "slide", "slip", "free", "separate", "rigid", "elastic", "solid", "elastic", "granular", "sand", NULL};
+
+/* A likely meant value among names for word: a close spelling or another word for it; NULL if none. */
+static const char *enum_suggestion(const char *word, const char *const *names, int n) {
+    const char *sug = sc_closest(word, names, n);
+    for (int i = 0; !sug && enum_aliases[i]; i += 2)
+        if (!strcasecmp(word, enum_aliases[i]))
+            for (int k = 0; k < n; k++)
+                if (!strcmp(enum_aliases[i + 1], names[k])) sug = names[k];
+    return sug;
+}
+
 int sc_enum_field(vctx *v, int t, const char *key, const char *const *names, int n, int def) {
     char b[64], list[256] = "";
     size_t old = 0;
@@ -359,6 +381,8 @@ int sc_enum_field(vctx *v, int t, const char *key, const char *const *names, int
             field_close(v, old);
             return i;
         }
+    const char *sug = enum_suggestion(str, names, n);
+    if (sug) sc_fail(v, "expected %s, got \"%s\" (did you mean \"%s\"?)", list, str, sug);
     sc_fail(v, "expected %s, got \"%s\"", list, str);
 }
 

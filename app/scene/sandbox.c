@@ -128,9 +128,9 @@ void sc_charge(lua_State *L, const char *what, long long cost) {
     if (late) over_time(L, s, where, late);
     char msg[256];
     snprintf(msg, sizeof msg,
-             "%s: instruction limit exceeded (%d million Lua instructions; this call alone would count as %.3g): too "
-             "much work for a scene",
-             what, (int)(s->insn_limit / 1000000), (double)cost);
+             "%s: instruction limit exceeded (%d million Lua instructions, the work inside library functions "
+             "counted too): too much work for a scene",
+             what, (int)(s->insn_limit / 1000000));
     trip(L, s, where, msg);
 }
 

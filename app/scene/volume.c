@@ -14,7 +14,8 @@
  *   ball in a box: the integral over z of the disk-in-rectangle area of the cross-section, by
  *                Gauss-Legendre quadrature on the pieces between the heights where the
  *                cross-section's radius reaches an edge or a corner of the rectangle (the area is
- *                smooth inside each piece);
+ *                smooth inside each piece but for (z - z_end)^(3/2) at its ends, which a cosine
+ *                change of variable smooths);
  *   boxes and cylinders whose axes are the coordinate axes (any rotation by multiples of 90
  *                degrees): products of interval overlaps (and a disk-in-rectangle area);
  *   any bounded shape entirely inside the box, or disjoint from it; inside-out shapes as the box
@@ -30,7 +31,7 @@
 #include "app/scene/scene_internal.h"
 
 #define PI 3.14159265358979323846
-#define GL_N 12 /* Gauss-Legendre points per piece */
+#define GL_N 16 /* Gauss-Legendre points per piece */
 
 static double box_volume(const double lo[3], const double hi[3], int dim) {
     double v = 1;
@@ -196,10 +197,13 @@ static double ball_box_volume(const double c[3], double r, const double lo[3], c
     double gx[GL_N], gw[GL_N], v = 0;
     gauss_legendre(gx, gw);
     for (int i = 0; i + 1 < n; i++) {
-        double a = cut[i], b = cut[i + 1], m = 0.5 * (a + b), h = 0.5 * (b - a);
-        for (int k = 0; k < GL_N && h > 0; k++) {
-            double z = m + h * gx[k], rho = sqrt(fmax(0, r * r - (z - c[2]) * (z - c[2])));
-            v += h * gw[k] * disk_rect_area(c[0], c[1], rho, lo[0], hi[0], lo[1], hi[1]);
+        /* z = a + (b - a)(1 - cos(pi u)) / 2 crowds the points to the piece's ends, where the area
+           behaves like (z - a)^(3/2): smooth in u, so Gauss-Legendre converges fast */
+        double a = cut[i], b = cut[i + 1];
+        for (int k = 0; k < GL_N && b > a; k++) {
+            double u = 0.5 * (gx[k] + 1), z = a + (b - a) * 0.5 * (1 - cos(PI * u));
+            double rho = sqrt(fmax(0, r * r - (z - c[2]) * (z - c[2])));
+            v += 0.5 * gw[k] * (b - a) * 0.5 * PI * sin(PI * u) * disk_rect_area(c[0], c[1], rho, lo[0], hi[0], lo[1], hi[1]);
         }
     }
     return v;

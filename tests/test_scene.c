@@ -442,7 +442,7 @@ static void test_bad(void) {
     if (s) {
         CHECK(sm_scene_get_settings(s)->estimated_particles == 0);
         CHECK(sm_scene_build(s, err, sizeof err) == 2);
-        CHECK(strstr(err, "clip.lua: objects[1]: no particles") != NULL);
+        CHECK(strstr(err, "clip.lua:4: objects[1]: no particles") != NULL);
         printf("  %s\n", err);
         CHECK(sm_scene_world(s) == NULL);
     }

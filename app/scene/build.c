@@ -16,8 +16,10 @@ static sm_status add_colliders(sm_scene *s, sm_world *w, char *err, size_t errle
             c->def.motion_user = c;
         }
         sm_status st = sm_world_add_collider(w, &c->def, NULL);
+        char key[64], at[1100];
+        snprintf(key, sizeof key, "colliders[%d]", i + 1);
         if (st != SM_OK)
-            return sc_fail_msg(err, errlen, scene_status(st), "%s: colliders[%d]: %s", s->path, i + 1,
+            return sc_fail_msg(err, errlen, scene_status(st), "%s: %s: %s", sc_where(s, key, at, sizeof at), key,
                                sm_world_errmsg(w));
         if (s->motion_err[0]) return sc_fail_msg(err, errlen, SM_ERR_INVALID, "%s", s->motion_err);
     }
@@ -31,13 +33,16 @@ static sm_status seed_objects(sm_scene *s, sm_world *w, char *err, size_t errlen
         sd.clip = o->has_clip ? &o->clip : NULL;
         size_t added = 0;
         sm_status st = sm_world_seed_shape(w, &o->shape, &sd, &added);
+        char key[64], at[1100];
+        snprintf(key, sizeof key, "objects[%d]", i + 1);
         if (st != SM_OK)
-            return sc_fail_msg(err, errlen, scene_status(st), "%s: objects[%d]: %s", s->path, i + 1, sm_world_errmsg(w));
+            return sc_fail_msg(err, errlen, scene_status(st), "%s: %s: %s", sc_where(s, key, at, sizeof at), key,
+                               sm_world_errmsg(w));
         if (added == 0)
             return sc_fail_msg(err, errlen, SM_ERR_INVALID,
-                               "%s: objects[%d]: no particles: no seeding point of the domain's usable region (2 cells "
-                               "inside its walls) is inside the shape%s",
-                               s->path, i + 1, o->has_clip ? " and its clip" : "");
+                               "%s: %s: no particles: no seeding point of the domain's usable region (2 cells inside its "
+                               "walls) is inside the shape%s",
+                               sc_where(s, key, at, sizeof at), key, o->has_clip ? " and its clip" : "");
     }
     return SM_OK;
 }

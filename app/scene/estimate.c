@@ -31,53 +31,39 @@ static void usable_region(const sm_world_def *d, double lo[3], double hi[3]) {
     }
 }
 
-/* "path:line" for a key path of the scene (just the path if the line is not found). */
-static const char *where(const sm_scene *s, const char *keys, char *buf, size_t n) {
-    int line = sc_locate(s->source, s->source_len, keys);
-    if (line > 0) snprintf(buf, n, "%s:%d", s->path, line);
-    else snprintf(buf, n, "%s", s->path);
-    return buf;
-}
-
-/* Seeded particles; an object outside the usable region is an error. */
-static sm_status estimate_objects(sm_scene *s, const double lo[3], const double hi[3], double *est, char *err,
-                                  size_t errlen) {
-    const int dim = s->def.dim;
-    double cell = pow(s->def.dx, dim);
-    *est = 0;
+/* Seeded particles (cell = dx^d); an object outside the usable region is an error. */
+static sm_status estimate_objects(sm_scene *s, const double lo[3], const double hi[3], double cell, double *est,
+                                  char *err, size_t errlen) {
     for (int i = 0; i < s->nobj; i++) {
         scene_object *o = &s->objs[i];
         double blo[3], bhi[3];
         char key[64], at[1100];
         snprintf(key, sizeof key, "objects[%d].shape", i + 1);
-        if (sc_shape_bbox(&o->shape, dim, blo, bhi))
-            for (int a = 0; a < dim; a++)
-                if (!(bhi[a] > lo[a] && blo[a] < hi[a]))
-                    return sc_fail_msg(err, errlen, SM_ERR_INVALID,
-                                       "%s: %s: outside the domain along %c (the shape spans %g .. %g; particles go in "
-                                       "%g .. %g, 2 cells inside the domain)",
-                                       where(s, key, at, sizeof at), key, "xyz"[a], blo[a], bhi[a], lo[a], hi[a]);
-        double vol = sc_volume_in_box(&o->shape, o->has_clip ? &o->clip : NULL, dim, lo, hi, s->def.dx);
-        *est += vol / cell * o->seed.ppc;
+        int bounded = sc_shape_bbox(&o->shape, s->def.dim, blo, bhi);
+        for (int a = 0; bounded && a < s->def.dim; a++)
+            if (!(bhi[a] > lo[a] && blo[a] < hi[a]))
+                return sc_fail_msg(err, errlen, SM_ERR_INVALID,
+                                   "%s: %s: outside the domain along %c (the shape spans %g .. %g; particles go in %g "
+                                   ".. %g, 2 cells inside the domain)",
+                                   sc_where(s, key, at, sizeof at), key, "xyz"[a], blo[a], bhi[a], lo[a], hi[a]);
+        *est += sc_volume_in_box(&o->shape, o->has_clip ? &o->clip : NULL, s->def.dim, lo, hi, s->def.dx) / cell *
+                o->seed.ppc;
     }
     return SM_OK;
 }
 
 /* Emitted particles up to end_time; an emitter outside the usable region is an error. */
-static sm_status estimate_emitters(sm_scene *s, const double lo[3], const double hi[3], double *est, char *err,
-                                   size_t errlen) {
-    const int dim = s->def.dim;
-    double cell = pow(s->def.dx, dim);
-    *est = 0;
+static sm_status estimate_emitters(sm_scene *s, const double lo[3], const double hi[3], double cell, double *est,
+                                   char *err, size_t errlen) {
     for (int i = 0; i < s->nemit; i++) {
-        sm_emitter_def *e = &s->emits[i];
-        char key[64], at[1100];
+        const sm_emitter_def *e = &s->emits[i];
+        char at[1100], key[64];
         snprintf(key, sizeof key, "emitters[%d].shape", i + 1);
-        if (!(sc_volume_in_box(&e->shape, NULL, dim, lo, hi, s->def.dx) > 0))
+        if (!(sc_volume_in_box(&e->shape, NULL, s->def.dim, lo, hi, s->def.dx) > 0))
             return sc_fail_msg(err, errlen, SM_ERR_INVALID,
                                "%s: %s: outside the domain (particles are emitted only in the part of the shape at "
                                "least 2 cells inside the domain's walls)",
-                               where(s, key, at, sizeof at), key);
+                               sc_where(s, key, at, sizeof at), key);
         double t = fmin(e->stop, s->set.end_time) - e->start;
         if (t > 0) *est += e->rate * t / (s->mats[e->material].density * cell / e->ppc);
     }
@@ -192,10 +178,10 @@ sm_status sc_finish_load(sm_scene *s, char *err, size_t errlen) {
     if (sm_world_def_check(d, msg, sizeof msg) != SM_OK) /* validation checked it: not reached */
         return sc_fail_msg(err, errlen, SM_ERR_INVALID, "%s: %s", s->path, msg);
     size_t grid = sm_world_def_grid_bytes(d);
-    double lo[3], hi[3], est, emitted;
+    double lo[3], hi[3], est = 0, emitted = 0, cell = pow(d->dx, d->dim);
     usable_region(d, lo, hi);
-    sm_status st = estimate_objects(s, lo, hi, &est, err, errlen);
-    if (st == SM_OK) st = estimate_emitters(s, lo, hi, &emitted, err, errlen);
+    sm_status st = estimate_objects(s, lo, hi, cell, &est, err, errlen);
+    if (st == SM_OK) st = estimate_emitters(s, lo, hi, cell, &emitted, err, errlen);
     if (st != SM_OK) return st;
     for (int i = 0; i < s->nparams; i++)
         if (!s->params[i].used) {

@@ -12,6 +12,7 @@
  * table usually ends a scene). 0 if the first key is nowhere. */
 #define _POSIX_C_SOURCE 200809L
 #include <ctype.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -263,4 +264,11 @@ int sc_locate(const char *src, size_t n, const char *path) {
     }
     free(ts.t);
     return best_line;
+}
+
+const char *sc_where(const sm_scene *s, const char *keys, char *buf, size_t n) {
+    int line = sc_locate(s->source, s->source_len, keys);
+    if (line > 0) snprintf(buf, n, "%s:%d", s->path, line);
+    else snprintf(buf, n, "%s", s->path);
+    return buf;
 }

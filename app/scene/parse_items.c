@@ -127,8 +127,18 @@ static int shape_field(vctx *v, int t, const char *key, sm_shape *out) {
 static const char *const mat_models[] = {"sand", "elastic"};
 static const char *const keys_mat[] = {"model", "density", "E", "nu", "friction_angle", "hardening"};
 
+/* The library's limits on a material (sm_material_def_check), reported at the scene's key. */
+static void check_material_limits(vctx *v, const sm_material_def *m) {
+    char msg[256];
+    if (sm_material_def_check(m, msg, sizeof msg) == SM_OK) return;
+    static const char *const map[] = {"density", "density", "E", "E", "nu", "nu", "friction_angle", "friction_angle",
+                                      "hardening", "hardening", "h0", "hardening.1", "h1", "hardening.2",
+                                      "h2", "hardening.3", "h3", "hardening.4", NULL};
+    sc_fail_library(v, msg, map);
+}
+
 /* materials.NAME (table at t). Types and the format's rules here; the limits are
- * sm_material_def_check's. */
+ * sm_material_def_check's (density, E and nu checked first, with the model's default angles). */
 static void parse_material(vctx *v, int t, sm_material_def *out) {
     sc_check_keys(v, t, keys_mat, SC_NKEYS(keys_mat), "a material");
     int model = sc_enum_field(v, t, "model", mat_models, 2, 0);
@@ -136,6 +146,7 @@ static void parse_material(vctx *v, int t, sm_material_def *out) {
     m.density = sc_num_field(v, t, "density", m.density, NULL, SC_NOLIM);
     m.youngs_modulus = sc_num_field(v, t, "E", m.youngs_modulus, NULL, SC_NOLIM);
     m.poisson_ratio = sc_num_field(v, t, "nu", m.poisson_ratio, NULL, SC_NOLIM);
+    check_material_limits(v, &m);
     int has_fa, has_h = sc_get(v, t, "hardening") != LUA_TNIL;
     lua_pop(v->L, 1);
     double fa = sc_num_field(v, t, "friction_angle", 0, &has_fa, SC_NOLIM);
@@ -163,13 +174,7 @@ static void parse_material(vctx *v, int t, sm_material_def *out) {
             m.h3 = h[3];
         }
     }
-    char msg[256];
-    if (sm_material_def_check(&m, msg, sizeof msg) != SM_OK) {
-        static const char *const map[] = {"density", "density", "E", "E", "nu", "nu", "friction_angle", "friction_angle",
-                                          "hardening", "hardening", "h0", "hardening.1", "h1", "hardening.2",
-                                          "h2", "hardening.3", "h3", "hardening.4", NULL};
-        sc_fail_library(v, msg, map);
-    }
+    check_material_limits(v, &m);
     *out = m;
 }
 

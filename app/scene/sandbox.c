@@ -153,9 +153,10 @@ static void reraise_if_tripped(lua_State *L) {
     if (s->tripped) trip(L, s, "", "");
 }
 
-static int scene_pcall(lua_State *L) { /* pcall(f, ...) -> true, results | false, message */
-    luaL_checkany(L, 1);
-    int st = lua_pcall(L, lua_gettop(L) - 1, LUA_MULTRET, 0);
+/* The results of pcall and xpcall after lua_pcall returned st: true and the values from index
+ * slot + 1 on (slot is a spare stack slot below them), or false and the message (re-raised if the
+ * scene is tripped). */
+static int protected_results(lua_State *L, int st, int slot) {
     if (st != LUA_OK) {
         reraise_if_tripped(L);
         lua_pushboolean(L, 0);
@@ -163,8 +164,15 @@ static int scene_pcall(lua_State *L) { /* pcall(f, ...) -> true, results | false
         return 2;
     }
     lua_pushboolean(L, 1);
-    lua_insert(L, 1);
-    return lua_gettop(L);
+    lua_replace(L, slot);
+    return lua_gettop(L) - slot + 1;
+}
+
+static int scene_pcall(lua_State *L) { /* pcall(f, ...) -> true, results | false, message */
+    luaL_checkany(L, 1);
+    lua_pushnil(L);
+    lua_insert(L, 1); /* the slot for true */
+    return protected_results(L, lua_pcall(L, lua_gettop(L) - 2, LUA_MULTRET, 0), 1);
 }
 
 /* xpcall's message handler, guarded: the scene's handler (upvalue 1) runs only while the scene is
@@ -185,16 +193,7 @@ static int scene_xpcall(lua_State *L) { /* xpcall(f, handler, ...) */
     lua_replace(L, 2);     /* f, guard, args... */
     lua_pushvalue(L, 1);   /* f, guard, args..., f */
     lua_rotate(L, 3, 1);   /* f, guard, f, args... */
-    int st = lua_pcall(L, n - 2, LUA_MULTRET, 2);
-    if (st != LUA_OK) {
-        reraise_if_tripped(L);
-        lua_pushboolean(L, 0);
-        lua_insert(L, -2);
-        return 2;
-    }
-    lua_pushboolean(L, 1);
-    lua_replace(L, 2);
-    return lua_gettop(L) - 1;
+    return protected_results(L, lua_pcall(L, n - 2, LUA_MULTRET, 2), 2);
 }
 
 /* collectgarbage: only "count" and "collect" (the default); stopping or tuning the collector is

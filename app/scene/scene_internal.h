@@ -229,5 +229,7 @@ double sc_volume_in_box(const sm_shape *shape, const sm_shape *clip, int dim, co
                         double dx);
 /* The line of a key path ("objects[2].shape.center") in the source, 0 if not found. */
 int sc_locate(const char *src, size_t n, const char *path);
+/* "path:line" of a key path of the scene (just the path if the line is not found), in buf. */
+const char *sc_where(const sm_scene *s, const char *keys, char *buf, size_t n);
 
 #endif

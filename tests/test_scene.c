@@ -828,8 +828,8 @@ static void test_pattern_differential(void) {
         "return string.find(s, p, 1, true)", "return string.match(s, p)", "return string.match(s, p, 3)",
         "return string.gsub(s, p, '[%0]')", "return string.gsub(s, p, '%1-%%', 2)",
         "return string.gsub(s, p, function(a, b) return b end)", "return string.gsub(s, p, {a = 'A', ab = 1})",
-        "local r = {} for a, b in string.gmatch(s, p) do r[#r + 1] = tostring(a) .. ',' .. tostring(b) end "
-        "return table.concat(r, ';')",
+        ("local r = {} for a, b in string.gmatch(s, p) do r[#r + 1] = tostring(a) .. ',' .. tostring(b) end "
+         "return table.concat(r, ';')"),
     };
     static const char *const fixed[][2] = {
         {"hello world", "o"}, {"hello world", "l+"}, {"hello world", "(h)(e)"}, {"hello world", "()ll()"},

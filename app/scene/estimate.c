@@ -106,6 +106,16 @@ double sc_available_bytes(char *why, size_t n) {
     return avail;
 }
 
+/* The speed |v| + |w| lever of a start (velocity v, spin w): if it is the fastest so far, keeps it
+ * in *vmax and names it in what (fmt with the item's number). */
+static void keep_fastest(const double v[3], const double w[3], double lever, double *vmax, char *what, size_t n,
+                         const char *fmt, int item) {
+    double sp = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * lever;
+    if (!(sp > *vmax)) return;
+    *vmax = sp;
+    snprintf(what, n, fmt, item);
+}
+
 /* The largest speed the scene starts with, and which key gives it (in what). */
 static double start_speed(const sm_scene *s, char *what, size_t n) {
     const sm_world_def *d = &s->def;
@@ -113,28 +123,21 @@ static double start_speed(const sm_scene *s, char *what, size_t n) {
     for (int a = 0; a < d->dim; a++) diag += pow(d->domain_max[a] - d->domain_min[a], 2);
     diag = 0.5 * sqrt(diag); /* a lever arm for spins: half the domain's diagonal */
     snprintf(what, n, "nothing moves at the start");
-#define SPEED(v, w, fmt, idx)                                                                                       \
-    do {                                                                                                            \
-        double sp_ = sqrt((v)[0] * (v)[0] + (v)[1] * (v)[1] + (v)[2] * (v)[2]) +                                    \
-                     sqrt((w)[0] * (w)[0] + (w)[1] * (w)[1] + (w)[2] * (w)[2]) * diag;                               \
-        if (sp_ > vmax) {                                                                                           \
-            vmax = sp_;                                                                                             \
-            snprintf(what, n, fmt, idx);                                                                            \
-        }                                                                                                           \
-    } while (0)
     const double none[3] = {0, 0, 0};
-    for (int i = 0; i < s->nobj; i++) SPEED(s->objs[i].seed.velocity, s->objs[i].seed.angular_velocity, "objects[%d]", i + 1);
-    for (int i = 0; i < s->nemit; i++) SPEED(s->emits[i].velocity, none, "emitters[%d].velocity", i + 1);
+    for (int i = 0; i < s->nobj; i++)
+        keep_fastest(s->objs[i].seed.velocity, s->objs[i].seed.angular_velocity, diag, &vmax, what, n, "objects[%d]",
+                     i + 1);
+    for (int i = 0; i < s->nemit; i++)
+        keep_fastest(s->emits[i].velocity, none, diag, &vmax, what, n, "emitters[%d].velocity", i + 1);
     for (int i = 0; i < s->ncol; i++) {
         const scene_collider *c = &s->cols[i];
-        SPEED(c->def.velocity, c->def.angular_velocity, "colliders[%d]", i + 1);
+        keep_fastest(c->def.velocity, c->def.angular_velocity, diag, &vmax, what, n, "colliders[%d]", i + 1);
         for (int k = 0; k + 1 < c->nkf; k++) {
             double v[3];
             for (int a = 0; a < 3; a++) v[a] = (c->kf[k + 1].pos[a] - c->kf[k].pos[a]) / (c->kf[k + 1].t - c->kf[k].t);
-            SPEED(v, none, "colliders[%d].keyframes", i + 1);
+            keep_fastest(v, none, diag, &vmax, what, n, "colliders[%d].keyframes", i + 1);
         }
     }
-#undef SPEED
     return vmax;
 }
 

@@ -235,7 +235,7 @@ void sm_scene_destroy(sm_scene *s) {
     if (!s) return;
     sm_world_destroy(s->world);
     if (s->L) {
-        sc_set_budget(s, MOTION_INSN_LIMIT, MOTION_TIME_LIMIT, "closing the scene"); /* no scene code runs here (no __gc) */
+        s->hooks_on = 0; /* no scene code runs here (no __gc) */
         lua_close(s->L);
     }
     for (int i = 0; i < s->nmat; i++) free(s->mat_names[i]);

@@ -740,6 +740,10 @@ static void test_time_limit(void) {
     sc_scene_limits.scene_time = 1e-9;
     refuse_pre("local n = 0 for i = 1, 1e6 do n = n + i end", "time limit exceeded (1e-09 s of CPU time for the scene file)");
     refuse_pre("pcall(function() local n = 0 for i = 1, 1e6 do n = n + i end end) while true do end", "time limit exceeded");
+    /* few instructions, much work: each concatenation copies 50 MB (the instruction count alone would
+       allow about 12 million of them) */
+    sc_scene_limits.scene_time = 0.2;
+    refuse_pre("local big = string.rep('x', 5e7)\nfor i = 1, 1e6 do local t = big .. 'x' end", "hostile.lua:2: time limit exceeded");
     sc_scene_limits = keep;
     sc_scene_limits.motion_time = 1e-9;
     refuse_motion("local n = 0 for i = 1, 1e5 do n = n + i end", "time limit exceeded (1e-09 s of CPU time for a motion-function call)");
@@ -762,7 +766,8 @@ static void test_memory_bombs(void) {
     refuse_pre("local s = ('x'):rep(2^31)", "memory limit exceeded");
     refuse_pre("table.move({}, 1, 2^40, 1, {})", "table.move: instruction limit exceeded");
     refuse_pre("local t = {} for i = 1, 3e5 do t[i] = i end\nfor i = 1, 100 do table.sort(t) end", "table.sort: instruction limit");
-    refuse_pre("local s = string.rep('x', 1e7)\nfor i = 1, 1e6 do local u = s:upper() end", "string.upper: instruction limit");
+    refuse_pre("local s = string.rep('x', 1e7)\nfor i = 1, 1e6 do local u = s:upper() end",
+               "hostile.lua:2: instruction limit exceeded"); /* upper's charge or its result's memory */
     CHECK(strcmp(motion_after_frame0("local s = string.rep('', 2^50)"), "") == 0);
     refuse_motion("local s = string.rep('x', 2^40)", "memory limit exceeded");
     refuse_motion("local s = string.rep('x', 2^24)", "string.rep: instruction limit exceeded (1 million");

@@ -1,5 +1,8 @@
 /* The scene sandbox: a fresh lua_State per scene with
- *   - a counting allocator: the memory limit (SCENE_MEM_LIMIT, 256 MB of Lua memory);
+ *   - a counting allocator: the memory limit (SCENE_MEM_LIMIT, 256 MB of Lua memory), and the
+ *     memory a scene allocates counted as work (bytes / 256), so that a loop of few instructions
+ *     that copies much (big string concatenations) meets the limits as soon as a loop that
+ *     computes;
  *   - a budget of work: the count hook adds HOOK_STEP every HOOK_STEP Lua instructions, and the
  *     library functions that can work long inside one call (string.rep, the pattern functions,
  *     table.sort/concat/move/insert/remove/unpack, print, string.format/upper/lower/reverse) add
@@ -59,6 +62,11 @@ static int out_of_time(sm_scene *s) {
     return 0;
 }
 
+static void insn_hook(lua_State *L, lua_Debug *ar);
+
+/* The Lua allocator: refuses growth past the memory limit, and charges growth to the budget
+ * (bytes / 256: a concatenation of big strings is few instructions but much work); when the
+ * budget is due for a look at the clocks it makes the hook run at the very next instruction. */
 static void *scene_alloc(void *ud, void *ptr, size_t osize, size_t nsize) {
     sm_scene *s = ud;
     size_t old = ptr ? osize : 0;
@@ -74,10 +82,15 @@ static void *scene_alloc(void *ud, void *ptr, size_t osize, size_t nsize) {
     void *q = realloc(ptr, nsize);
     if (!q) return nsize <= old ? ptr : NULL; /* Lua assumes shrinking never fails */
     s->mem = s->mem - old + nsize;
+    if (nsize > old && s->hooks_on) {
+        s->insn += (long long)((nsize - old) / 256);
+        if (s->insn >= s->next_clock && s->hook_every != 1) {
+            s->hook_every = 1; /* lua_sethook only sets the hook's fields: safe here */
+            lua_sethook(s->L, insn_hook, LUA_MASKCOUNT, 1);
+        }
+    }
     return q;
 }
-
-static void insn_hook(lua_State *L, lua_Debug *ar);
 
 /* Marks the scene tripped with msg (prefixed by where, the position of the scene code that ran
  * into the limit) and raises it; every later instruction raises it again. */
@@ -85,6 +98,7 @@ static void trip(lua_State *L, sm_scene *s, const char *where, const char *msg) 
     if (!s->tripped) {
         s->tripped = 1;
         snprintf(s->trip_msg, sizeof s->trip_msg, "%s%s", where, msg);
+        s->hook_every = 1;
         lua_sethook(L, insn_hook, LUA_MASKCOUNT, 1);
     }
     lua_pushstring(L, s->trip_msg);
@@ -103,7 +117,11 @@ static void insn_hook(lua_State *L, lua_Debug *ar) {
     (void)ar;
     sm_scene *s = sc_scene_of(L);
     if (s->tripped) trip(L, s, "", "");
-    s->insn += HOOK_STEP;
+    s->insn += s->hook_every;
+    if (s->hook_every != HOOK_STEP) { /* called early by the allocator: back to the usual pace */
+        s->hook_every = HOOK_STEP;
+        lua_sethook(L, insn_hook, LUA_MASKCOUNT, HOOK_STEP);
+    }
     int late = s->insn <= s->insn_limit ? out_of_time(s) : 0;
     if (s->insn <= s->insn_limit && !late) return;
     luaL_where(L, 0); /* in a hook, level 0 is the interrupted function */
@@ -144,6 +162,8 @@ void sc_set_budget(sm_scene *s, long long limit, double seconds, const char *wha
     s->wall_start = clock_seconds(CLOCK_MONOTONIC);
     s->tripped = 0;
     s->trip_msg[0] = 0;
+    s->hooks_on = 1;
+    s->hook_every = HOOK_STEP;
     lua_sethook(s->L, insn_hook, LUA_MASKCOUNT, HOOK_STEP);
 }
 

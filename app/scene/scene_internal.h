@@ -83,6 +83,8 @@ struct sm_scene {
     double cpu_start, wall_start; /* when the budget began: thread CPU time, CLOCK_MONOTONIC */
     const char *budget_what;    /* "the scene file", "a motion-function call" */
     int tripped;                /* a limit ran out: every instruction raises trip_msg again */
+    int hooks_on;               /* the allocator may charge and set the hook (off in lua_close) */
+    int hook_every;             /* instructions between two hook calls now */
     char trip_msg[512];
     char path[1024];
     char *source;

@@ -1,19 +1,28 @@
 /* Lua 5.4 scene files: load, validate, estimate, build a world.
  *
  * A scene file is a Lua chunk that returns a table (keys: dim, dx, ppc, domain, materials,
- * objects, colliders, emitters, outputs, camera, ...; see scenes/default.lua and the comment at
- * the top of app/scene.c for the whole format). It runs in a sandbox: only the base (without
- * dofile, loadfile, load), math, string (without string.dump) and table libraries, at most
- * 50 million Lua instructions for the file, 1 million per motion-function call, and 256 MB of Lua
- * memory. The global table `params` holds params.quality ("preview", "paper" or "test") and every
- * --set KEY=VALUE; the global function axis_angle(ax, ay, az, degrees) returns the quaternion
- * {w, x, y, z} of a rotation, for motion functions.
+ * objects, colliders, emitters, outputs, camera, ...; see scenes/default.lua, docs/scene-format.md
+ * and the comment at the top of app/scene.c for the whole format; the loader's files are under
+ * app/scene/). It runs in a sandbox (app/scene/sandbox.c; docs/scene-format.md "Sandbox"): only
+ * the base library (without dofile, loadfile, load), math, string (without dump, pack, unpack),
+ * table and utf8; no io, os, package, debug, coroutine; at most 50 million Lua instructions and
+ * 10 s of CPU time (100 s of wall clock) for the file, 1 million and 0.1 s (1 s) per
+ * motion-function call, and 256 MB of Lua memory. Library functions that can work long in one call
+ * (string.rep, the pattern functions, table.sort, ...) count their work against the instruction
+ * limit, and a limit that runs out cannot be caught by pcall or xpcall. After validation the loader
+ * refuses a scene whose estimated memory (from exact shape volumes) exceeds 90% of what the process
+ * can still get (MemAvailable, RLIMIT_AS, RLIMIT_DATA), a run of more than 100 million time steps,
+ * gravity above 1e4 m/s^2 and a camera whose up vector is parallel to its view. The global table
+ * `params` holds params.quality ("preview", "paper" or "test") and every --set KEY=VALUE; the
+ * global function axis_angle(ax, ay, az, degrees) returns the quaternion {w, x, y, z} of a
+ * rotation, for motion functions.
  *
- * Errors are tier 2 (DESIGN §5): a return code (2 bad input, 5 out of memory) and a message that
- * starts with the scene path, and the line where it can be found:
+ * Errors are tier 2 (DESIGN §5): an sm_status (SM_ERR_INVALID bad input, SM_ERR_IO a scene file
+ * that cannot be opened or read, SM_ERR_NOMEM out of memory) and a message that starts with the
+ * scene path, and the line where it can be found:
  *   scenes/castle.lua:12: unexpected symbol near '}'
  *   scenes/castle.lua:40: colliders[2].frction: unknown key (did you mean "friction"?)
- *   scenes/castle.lua: materials.sand.E: must be > 0, got -5 */
+ *   scenes/castle.lua:7: materials.sand.E: must be > 0, got -5 */
 #ifndef SM_APP_SCENE_H
 #define SM_APP_SCENE_H
 
@@ -48,10 +57,11 @@ typedef struct sm_scene_settings {
  * is the Lua text and path only names it in messages (NULL: "scene"). quality: "preview" (NULL),
  * "paper" or "test". params: --set KEY=VALUE pairs, as params.KEY (a number if VALUE parses as
  * one, true/false as booleans, else the string); a key the scene never reads is an error.
- * threads: OpenMP threads for the world, 0 = default. Returns 0 and *out, or 2 (bad input) / 5
- * (out of memory) with *out = NULL and a message in err. */
-int sm_scene_load(const char *path, const char *source, const sm_scene_param *params, int nparams,
-                  const char *quality, int threads, sm_scene **out, char *err, size_t errlen);
+ * threads: OpenMP threads for the world, 0 = default. Returns SM_OK and *out, or SM_ERR_INVALID
+ * (bad input) / SM_ERR_IO (the file cannot be read) / SM_ERR_NOMEM with *out = NULL and a message
+ * in err. */
+sm_status sm_scene_load(const char *path, const char *source, const sm_scene_param *params, int nparams,
+                        const char *quality, int threads, sm_scene **out, char *err, size_t errlen);
 
 const sm_scene_settings *sm_scene_get_settings(const sm_scene *s);
 
@@ -62,10 +72,10 @@ const sm_world_def *sm_scene_world_def(const sm_scene *s);
 int sm_scene_material_count(const sm_scene *s);
 const char *sm_scene_material_name(const sm_scene *s, int id); /* NULL if id is out of range */
 
-/* Creates the world, materials, colliders, objects (seeded) and emitters. Returns 0, 2 (bad input:
- * an object outside the domain, a library error, a motion function failing at t = 0; message in
- * err) or 5 (out of memory). Once only. */
-int sm_scene_build(sm_scene *s, char *err, size_t errlen);
+/* Creates the world, materials, colliders, objects (seeded) and emitters. Returns SM_OK,
+ * SM_ERR_INVALID (an object that seeds nothing, a library error, a motion function failing at
+ * t = 0; message in err) or SM_ERR_NOMEM. Once only. */
+sm_status sm_scene_build(sm_scene *s, char *err, size_t errlen);
 
 /* The world (NULL before a successful sm_scene_build). Owned by the scene. */
 sm_world *sm_scene_world(sm_scene *s);

@@ -86,25 +86,28 @@ def pose_from(result, dim, what):
         position, rotation = result
     else:
         position, rotation = result, None
-    try:
-        p = [float(x) for x in position]
-    except TypeError:
-        raise TypeError("%s: returned position: expected %d numbers, got %r" % (what, dim, position)) from None
+    p = _numbers(position, "%s: returned position: expected %d numbers" % (what, dim))
     if len(p) not in (dim, 3) or not all(math.isfinite(x) for x in p):
         raise ValueError("%s: returned position: expected %d finite numbers, got %r" % (what, dim, position))
     p = (p + [0.0])[:3]
     if rotation is None:
         return p, [1.0, 0.0, 0.0, 0.0]
-    try:
-        q = [float(x) for x in rotation]
-    except TypeError:
-        raise TypeError("%s: returned rotation: expected (w, x, y, z), got %r" % (what, rotation)) from None
+    q = _numbers(rotation, "%s: returned rotation: expected (w, x, y, z)" % what)
     n = math.sqrt(sum(x * x for x in q)) if len(q) == 4 and all(math.isfinite(x) for x in q) else 0.0
     if not 0.5 < n < 2:
         raise ValueError("%s: returned rotation: expected a unit quaternion (w, x, y, z), got %r" % (what, rotation))
     if dim == 2 and (abs(q[1]) > 1e-9 or abs(q[2]) > 1e-9):
         raise ValueError("%s: returned rotation: in 2D a rotation must be about z, got %r" % (what, rotation))
     return p, q
+
+
+def _numbers(value, expected):
+    if isinstance(value, (str, bytes)):
+        raise TypeError("%s, got %r" % (expected, value))
+    try:
+        return [float(x) for x in value]
+    except (TypeError, ValueError):
+        raise TypeError("%s, got %r" % (expected, value)) from None
 
 
 def _is_number(x):

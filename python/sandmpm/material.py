@@ -13,7 +13,7 @@ class Material:
 
     __slots__ = ("_c",)
 
-    def __init__(self, kind, **kw):
+    def __init__(self, kind, /, **kw):
         kind_value = _fields.enum_value(ffi.typeof("sm_material_kind"), kind, "Material: kind")
         base = lib.sm_material_def_sand() if kind_value == lib.SM_MATERIAL_SAND else lib.sm_material_def_elastic()
         c = ffi.new("sm_material_def *", base)

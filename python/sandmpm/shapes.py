@@ -24,7 +24,7 @@ class Shape:
 
     __slots__ = ("_c",)
 
-    def __init__(self, kind, **kw):
+    def __init__(self, kind, /, **kw):
         kind_value = _fields.enum_value(ffi.typeof("sm_shape_kind"), kind, "Shape: kind")
         c = ffi.new("sm_shape *", lib.sm_shape_default(kind_value))
         _fields.fill(c[0], kw, "Shape.%s()" % _fields.enum_name(ffi.typeof("sm_shape_kind"), kind_value),

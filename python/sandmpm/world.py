@@ -92,8 +92,8 @@ class World:
         last of them goes). Further calls raise ValueError; calling close() again does nothing."""
         if self._native is not None:
             self._views.retire()
-            native, self._native = self._native, None
-            del native  # _Native.__del__ destroys it once its last reference is gone
+            self._views.owner = None
+            self._native = None  # _Native.__del__ destroys the world once its last reference is gone
 
     @property
     def closed(self):

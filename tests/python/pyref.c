@@ -19,7 +19,7 @@
 
 #include "sandmpm/sandmpm.h"
 
-#define PLATE_X0 0.25
+#define PLATE_X0 0.285
 #define PLATE_Y0 0.2
 #define PLATE_V 0.5
 #define PLATE_HALF_W 0.01
@@ -85,7 +85,7 @@ static int run_column3(void) {
 }
 
 static int run_frames2(void) {
-    sm_world *w = column(2, 0.01);
+    sm_world *w = column(2, 0.02);
     if (!w) return 1;
     for (int f = 1; f <= 3; f++) {
         sm_world_reset_step_stats(w);

@@ -3,7 +3,7 @@ import math
 
 import sandmpm as sm
 
-PLATE_X0, PLATE_Y0, PLATE_V, PLATE_HALF_W = 0.25, 0.2, 0.5, 0.01
+PLATE_X0, PLATE_Y0, PLATE_V, PLATE_HALF_W = 0.285, 0.2, 0.5, 0.01
 
 
 def column(dim, dx):
@@ -23,7 +23,7 @@ def step_adaptive(w, n):
 
 def plate(motion=None):
     """A 2D sand layer (x 0.3..0.7, y 0.1..0.2) on a sticky ground, and a sticky plate at
-    x = 0.25 moving +x at 0.5 m/s: constant velocity, or the callable `motion` if given."""
+    x = 0.285 (its face touching the sand) moving +x at 0.5 m/s: constant velocity, or the callable `motion` if given."""
     w = sm.World(dim=2, dx=0.01)
     sand = sm.Material.sand()
     w.add_collider(sm.Collider(sm.Shape.halfspace((0, 0.1, 0), (0, 1, 0))))

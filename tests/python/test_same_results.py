@@ -16,7 +16,7 @@ def test_adaptive_steps_match_c_bitwise(pyref):
 def test_run_frames_match_c_advance_bitwise(pyref):
     ref = pyref("frames2")
     hashes = {}
-    with column(2, 0.01) as w:
+    with column(2, 0.02) as w:
         w.run(3, 60.0, on_frame=lambda world, f: hashes.__setitem__(f, hexhash(world)))
         assert w.time == 3 / 60.0
     assert sorted(hashes) == [0, 1, 2, 3]
@@ -28,7 +28,7 @@ def test_run_frames_match_c_advance_bitwise(pyref):
 def test_advance_with_callback_takes_the_same_steps_as_c_advance(pyref):
     ref = pyref("frames2")
     count = [0]
-    with column(2, 0.01) as w:
+    with column(2, 0.02) as w:
         for f in (1, 2, 3):
             w.advance(f / 60.0, callback=lambda world: count.__setitem__(0, count[0] + 1))
             assert w.time == f / 60.0

@@ -3,7 +3,8 @@
 # are already installed are not touched, and apt is not called at all when nothing is missing.
 set -euo pipefail
 
-PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev)
+# python3-*: the Python package (cffi in ABI mode, NumPy views) and its tests (pytest, run by CTest).
+PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev python3 python3-cffi python3-numpy python3-pytest)
 
 missing=()
 for p in "${PACKAGES[@]}"; do

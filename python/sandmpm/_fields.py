@@ -7,7 +7,6 @@ that length; 3-vectors also take 2 numbers (z = 0, as the library ignores z in 2
 """
 import difflib
 import inspect
-import math
 
 from ._ffi import ffi
 
@@ -146,7 +145,3 @@ def signature(defaults, first=()):
     params = [inspect.Parameter(n, inspect.Parameter.POSITIONAL_OR_KEYWORD) for n in first]
     params += [inspect.Parameter(k, inspect.Parameter.KEYWORD_ONLY, default=v) for k, v in defaults.items()]
     return inspect.Signature(params)
-
-
-def finite(x):
-    return isinstance(x, (int, float)) and math.isfinite(x)

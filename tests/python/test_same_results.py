@@ -1,5 +1,4 @@
 """The same world stepped from Python and from C (pyref.c) has bit-identical state."""
-import sandmpm as sm
 from scenes import column, hexhash, step_adaptive
 
 

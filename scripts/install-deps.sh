@@ -3,7 +3,9 @@
 # are already installed are not touched, and apt is not called at all when nothing is missing.
 set -euo pipefail
 
-PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev libassimp-dev)
+# libassimp-dev: mesh files. python3-*: the Python package (cffi in ABI mode, NumPy views) and its
+# tests (pytest, run by CTest).
+PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev python3 python3-cffi python3-numpy python3-pytest libassimp-dev)
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -51,7 +51,7 @@ cmake --build "$tmp/consumer/build" >/dev/null
 LD_LIBRARY_PATH="$tmp/prefix/lib" "$tmp/consumer/build/consumer_shared"
 "$tmp/consumer/build/consumer_static"
 # The shared program really uses the installed libsandmpm.so.
-LD_LIBRARY_PATH="$tmp/prefix/lib" ldd "$tmp/consumer/build/consumer_shared" | grep -q "$tmp/prefix/lib/libsandmpm.so"
+LD_LIBRARY_PATH="$tmp/prefix/lib" ldd "$tmp/consumer/build/consumer_shared" | grep "$tmp/prefix/lib/libsandmpm.so" >/dev/null
 export PKG_CONFIG_PATH="$tmp/prefix/lib/pkgconfig"
 # shellcheck disable=SC2046
 "$cc" -o "$tmp/consumer/pc" "$tmp/consumer/main.c" $(pkg-config --cflags --libs sandmpm)

@@ -217,7 +217,7 @@ size_t sm_world_memory_bytes(const sm_world *w) {
     const sm_particles *P = &w->p;
     const size_t d = (size_t)w->dim, dd = d * d;
     size_t b = sizeof *w;
-    b += P->cap * (sizeof(sm_real) * (2 * d + 2 * dd + SM_NTAU(d) + 3) + sizeof(uint16_t));
+    b += P->cap * sm_particles_packed_size(w->dim);
     b += w->perm_cap * sizeof(uint32_t);
     b += sm_grid_bytes(&w->grid);
     b += w->pb_cap * sizeof(sm_pblock) + w->pb_hash.cap * (sizeof(uint64_t) + sizeof(uint32_t));
@@ -430,19 +430,14 @@ sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions,
     const sm_material_rt *m = &w->mats[material];
     double vol0 = pow(w->def.dx, d) / ppc;
     sm_particles *P = &w->p;
+    sm_particles_init_rest(P, d, first, n);
     for (size_t i = 0; i < n; i++) {
         size_t p = first + i;
         for (int a = 0; a < d; a++) {
             P->x[p * d + a] = (sm_real)positions[i * 3 + a];
             P->v[p * d + a] = velocities ? (sm_real)velocities[i * 3 + a] : 0;
         }
-        for (int k = 0; k < d * d; k++) {
-            P->B[p * d * d + k] = 0;
-            P->F[p * d * d + k] = (k % (d + 1) == 0) ? 1 : 0;
-        }
-        for (int k = 0; k < SM_NTAU(d); k++) P->tau[p * SM_NTAU(d) + k] = 0;
         P->vol0[p] = (sm_real)vol0;
-        P->q[p] = 0;
         P->alpha[p] = m->alpha0;
         P->mat[p] = (uint16_t)material;
     }
@@ -858,19 +853,7 @@ void sm_world_reset_step_stats(sm_world *w) {
     w->max_dt = 0;
 }
 
-uint64_t sm_world_state_hash(const sm_world *w) {
-    const sm_particles *P = &w->p;
-    const size_t n = P->n, d = (size_t)w->dim, dd = d * d;
-    uint64_t h = SM_HASH_INIT;
-    h = sm_hash64(&n, sizeof n, h);
-    h = sm_hash64(P->x, n * d * sizeof(sm_real), h);
-    h = sm_hash64(P->v, n * d * sizeof(sm_real), h);
-    h = sm_hash64(P->B, n * dd * sizeof(sm_real), h);
-    h = sm_hash64(P->F, n * dd * sizeof(sm_real), h);
-    h = sm_hash64(P->q, n * sizeof(sm_real), h);
-    h = sm_hash64(P->alpha, n * sizeof(sm_real), h);
-    return h;
-}
+uint64_t sm_world_state_hash(const sm_world *w) { return sm_particles_hash(&w->p, w->dim); }
 
 double sm_world_debug_implicit_jvp(sm_world *w, double dt, uint64_t seed, double vscale, double h) {
     sm_step_ctx c;

@@ -7,6 +7,7 @@
 #include "core/common.h"
 #include "grid/grid.h"
 #include "material/implicit.h"
+#include "particles/particles.h"
 
 /* A material with everything the hot loops need precomputed. */
 typedef struct sm_material_rt {
@@ -19,20 +20,6 @@ typedef struct sm_material_rt {
     sm_real alpha0;         /* alpha at q = 0 (fixed angle or hardening start) */
     double wave_speed;      /* sqrt((lambda + 2 mu)/rho), m/s */
 } sm_material_rt;
-
-/* Particles, structure of arrays. d = dim; matrices d*d row-major. A particle's mass is its
- * material's density times vol0 (not stored: memory is the budget, DESIGN §3). */
-typedef struct sm_particles {
-    size_t n, cap;
-    sm_real *x, *v, *B, *F;
-    sm_real *tau;           /* Kirchhoff stress of F^E, symmetric, SM_NTAU(d) values (xx, yy, zz, xy,
-                               xz, yz in 3D; xx, yy, xy in 2D), computed at the end of the previous
-                               step's plasticity (or at insertion): P F^T = tau, so the next P2G
-                               needs no second SVD (one SVD per particle per step). */
-    sm_real *vol0, *q, *alpha;
-    uint16_t *mat;
-} sm_particles;
-#define SM_NTAU(d) ((d) == 3 ? 6 : 3)
 
 /* A particle block: the particles whose stencil starts in grid block `key`. They touch nodes
  * 4 b .. 4 b + 6 per axis only, i.e. the live grid blocks b + {0,1}^d: gslot[c] with
@@ -188,10 +175,6 @@ sm_status sm_world_run_emitters(sm_world *w, double t0, double t1);
 static inline sm_real sm_particle_mass(const sm_material_rt *mats, const sm_particles *P, size_t p) {
     return mats[P->mat[p]].density * P->vol0[p];
 }
-
-/* Grows particle storage to hold at least n particles. */
-sm_status sm_particles_reserve(sm_particles *p, int dim, size_t n);
-void sm_particles_free(sm_particles *p);
 
 /* Computes tau (Kirchhoff stress) for particles [first, n) from their F (one SVD each). */
 void sm_world_init_stress(sm_world *w, size_t first);

@@ -227,60 +227,6 @@ static sm_status grow(void **ptr, size_t *cap, size_t need, size_t elem) {
     return SM_OK;
 }
 
-/* Moves particle storage into perm order (in place, following the permutation's cycles), so the
- * particles of a block are contiguous in memory; perm becomes the identity. */
-static void reorder_particles(sm_world *w) {
-    sm_particles *P = &w->p;
-    const size_t n = P->n;
-    uint32_t *perm = w->perm;
-    const uint32_t MARK = 0x80000000u;
-    for (size_t i = 0; i < n; i++) {
-        if (perm[i] & MARK) continue;
-        if (perm[i] == i) {
-            perm[i] |= MARK;
-            continue;
-        }
-        /* Position j receives the particle at perm[j]; save position i's particle first. */
-        sm_real x[D], v[D], B[DD], F[DD], tau[SM_NTAU(D)], scal[3];
-        uint16_t mat = P->mat[i];
-        memcpy(x, P->x + i * D, sizeof x);
-        memcpy(v, P->v + i * D, sizeof v);
-        memcpy(B, P->B + i * DD, sizeof B);
-        memcpy(F, P->F + i * DD, sizeof F);
-        memcpy(tau, P->tau + i * SM_NTAU(D), sizeof tau);
-        scal[0] = P->vol0[i];
-        scal[1] = P->q[i];
-        scal[2] = P->alpha[i];
-        size_t j = i;
-        for (;;) {
-            size_t src = perm[j];
-            perm[j] |= MARK;
-            if (src == i) break;
-            memcpy(P->x + j * D, P->x + src * D, sizeof x);
-            memcpy(P->v + j * D, P->v + src * D, sizeof v);
-            memcpy(P->B + j * DD, P->B + src * DD, sizeof B);
-            memcpy(P->F + j * DD, P->F + src * DD, sizeof F);
-            memcpy(P->tau + j * SM_NTAU(D), P->tau + src * SM_NTAU(D), sizeof tau);
-            P->vol0[j] = P->vol0[src];
-            P->q[j] = P->q[src];
-            P->alpha[j] = P->alpha[src];
-            P->mat[j] = P->mat[src];
-            j = src;
-        }
-        memcpy(P->x + j * D, x, sizeof x);
-        memcpy(P->v + j * D, v, sizeof v);
-        memcpy(P->B + j * DD, B, sizeof B);
-        memcpy(P->F + j * DD, F, sizeof F);
-        memcpy(P->tau + j * SM_NTAU(D), tau, sizeof tau);
-        P->vol0[j] = scal[0];
-        P->q[j] = scal[1];
-        P->alpha[j] = scal[2];
-        P->mat[j] = mat;
-    }
-    for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
-    w->reorders++;
-}
-
 static sm_status SM_FN(sort)(sm_world *w, const sm_step_ctx *c) {
     sm_grid *g = &w->grid;
     const size_t n = w->p.n;
@@ -455,7 +401,10 @@ static sm_status SM_FN(sort)(sm_world *w, const sm_step_ctx *c) {
      * (fewer than 16 in a row on average): contiguous runs make every later pass stream. */
     size_t breaks = 0;
     for (size_t i = 1; i < n; i++) breaks += w->perm[i] != w->perm[i - 1] + 1;
-    if (breaks * 16 > n) reorder_particles(w);
+    if (breaks * 16 > n) {
+        sm_particles_permute(&w->p, D, w->perm);
+        w->reorders++;
+    }
     return SM_OK;
 }
 

@@ -15,9 +15,8 @@
 
 #include "core/common.h"
 
-/* Values of the Kirchhoff stress tau per particle (symmetric: xx, yy, zz, xy, xz, yz in 3D;
- * xx, yy, xy in 2D). */
-#define SM_NTAU(d) ((d) == 3 ? 6 : 3)
+/* Values of the Kirchhoff stress tau per particle (symmetric, core/common.h's SM_NSYM order). */
+#define SM_NTAU(d) SM_NSYM(d)
 
 /* Value of a field in a new particle (sm_particles_init_rest); the caller then sets what it
  * knows (position, velocity, volume, alpha, material). */

@@ -1026,7 +1026,7 @@ static void test_friction(void) {
 }
 
 /* The grid update and the particle projection skip whole blocks whose centre is farther from a
- * collider than the block's radius (src/integrate/step_dim.c). That is only right if every signed
+ * collider than the block's radius (src/collide/grid_collide_dim.c, src/transfer/g2p_dim.c). That is only right if every signed
  * distance is 1-Lipschitz: |phi(x) - phi(y)| <= |x - y|. Check it on random pairs for every shape
  * kind, rotated, inside-out, in unions and complemented colliders, near and far from the surface. */
 static void test_lipschitz(void) {

@@ -8,7 +8,7 @@
  * - at a dt 10x above the explicit stability limit, explicit blows up (stopped with a numerical
  *   failure, or speeds above 100 m/s) while implicit stays bounded and settles. */
 #include "test_util.h"
-#include "world_internal.h"
+#include "world/world.h"
 
 #if SM_DOUBLE
 #define JVP_TOL 1e-5
@@ -93,16 +93,16 @@ int main(void) {
             w->def.newton_tolerance = 1e-9;
             CHECK(sm_world_advance(w, 0.06) == SM_OK); /* blocks in contact, stressed */
             CHECK(sm_world_step(w, 2e-3) == SM_OK);
-            int n = w->newton_last;
+            int n = w->newton.last_iterations;
             printf("%dD Newton residuals (m/s^2):", dim);
-            for (int i = 0; i <= n && i < 64; i++) printf(" %.3e", w->newton_hist[i]);
+            for (int i = 0; i <= n && i < 64; i++) printf(" %.3e", w->newton.hist[i]);
             printf("\n");
             CHECK(n >= 2);
             /* r_{k+1} <= C r_k^2 with C = 10 / r_0 (scale-free): quadratic, not linear. */
-            double r0 = w->newton_hist[0];
+            double r0 = w->newton.hist[0];
             int checked = 0;
             for (int i = 0; i + 1 <= n && i + 1 < 64; i++) {
-                double r = w->newton_hist[i], r1 = w->newton_hist[i + 1];
+                double r = w->newton.hist[i], r1 = w->newton.hist[i + 1];
                 if (r < NEWTON_FLOOR * r0) break; /* at the precision's rounding floor */
                 CHECK(r1 <= 10.0 * r * r / r0);
                 checked++;

@@ -1,5 +1,6 @@
-/* Tests of the lane-parallel plasticity (src/material/plastic_batch.h) against the scalar path of
- * step_dim.c (sm_svd + sm_dp_project + hardening + sm_hencky_tau), and of its log/exp/sin.
+/* Tests of the lane-parallel plasticity (src/material/plastic_batch.h) against the scalar path
+ * (sm_svd + sm_dp_project + hardening + sm_hencky_tau), and of its log/exp/sin. Lanes are filled
+ * with the packing helpers the library's plasticity stage uses.
  *
  * Tolerances (measured worst errors are printed; the bounds are ~4-10x those):
  *   log, exp, sin vs libm (double reference):  TOL_FN relative (float: 4 ulp, double: 8 eps)
@@ -40,12 +41,10 @@
 static unsigned long long rng = 0x1234abcd9876ULL;
 static double urand(double lo, double hi) { return sm_test_uniform(&rng, lo, hi); }
 
-typedef struct {
-    sm_real mu, lambda, h0, h1, h2, h3;
-    int plastic, hardening;
-} mat_t;
+typedef sm_plastic_params mat_t;
 
-/* The scalar path, as in step_dim.c plasticity. Returns the case (1 if elastic). */
+/* The scalar path (what the library computed per particle before the lanes). Returns the case
+ * (1 if elastic). */
 static int scalar_plastic(int D, const mat_t *m, sm_real *F, sm_real *alpha, sm_real *q, sm_real *T,
                           double *margin, double *cond) {
     sm_real U[9], V[9], s[3], tau[3];
@@ -193,11 +192,8 @@ static void test_functions(void) {
 
 static void fill_lane(sm_plastic_lanes *b, int l, int D, const sm_real *F, sm_real alpha, sm_real q,
                       const mat_t *m) {
-    for (int e = 0; e < 9; e++) b->F[e][l] = e < D * D ? F[e] : 0;
-    b->alpha[l] = alpha, b->q[l] = q;
-    b->mu[l] = m->mu, b->lambda[l] = m->lambda;
-    b->h0[l] = m->h0, b->h1[l] = m->h1, b->h2[l] = m->h2, b->h3[l] = m->h3;
-    b->plastic[l] = m->plastic, b->hardening[l] = m->hardening;
+    sm_plastic_lanes_set_params(b, l, m);
+    sm_plastic_lanes_load(b, D, l, F, alpha, q);
 }
 
 static void test_against_scalar(int D) {

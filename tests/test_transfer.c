@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "test_util.h"
-#include "world_internal.h"
+#include "world/world.h"
 
 #if SM_DOUBLE
 #define RTOL 1e-12

@@ -50,6 +50,10 @@ void *sm_realloc(void *p, size_t n);
 /* align: a power of two; n is rounded up to a multiple of it. */
 void *sm_aligned_alloc(size_t align, size_t n);
 
+/* Distinct entries of a symmetric d x d matrix, stored xx, yy, zz, xy, xz, yz (3D) or xx, yy, xy
+ * (2D). */
+#define SM_NSYM(d) ((d) == 3 ? 6 : 3)
+
 #define SM_MIN(a, b) ((a) < (b) ? (a) : (b))
 #define SM_MAX(a, b) ((a) > (b) ? (a) : (b))
 #define SM_PI 3.14159265358979323846

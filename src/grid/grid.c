@@ -29,10 +29,10 @@ void sm_block_hash_free(sm_block_hash *h) {
     memset(h, 0, sizeof *h);
 }
 
-void sm_grid_init(sm_grid *g, int dim, const int nodes[3], int separate_vt) {
+void sm_grid_init(sm_grid *g, int dim, const int nodes[3], int flip) {
     memset(g, 0, sizeof *g);
     g->dim = dim;
-    g->separate_vt = separate_vt;
+    g->flip = flip;
     for (int a = 0; a < 3; a++) {
         g->nodes[a] = (a < dim) ? nodes[a] : 1;
         g->blocks[a] = (a < dim) ? (nodes[a] + SM_BLOCK - 1) / SM_BLOCK : 1;
@@ -42,17 +42,15 @@ void sm_grid_init(sm_grid *g, int dim, const int nodes[3], int separate_vt) {
 
 void sm_grid_free(sm_grid *g) {
     free(g->key);
-    free(g->m);
-    free(g->v);
-    free(g->f);
-    if (g->separate_vt) free(g->vt);
+    free(g->mass);
+    for (int i = 0; i < 3; i++) free(g->vec[i]);
     sm_block_hash_free(&g->hash);
     memset(g, 0, sizeof *g);
 }
 
 size_t sm_grid_bytes(const sm_grid *g) {
     size_t nn = g->cap * (size_t)g->block_nodes;
-    return nn * sizeof(sm_real) * (1 + (g->separate_vt ? 3 : 2) * (size_t)g->dim) + g->cap * sizeof(uint64_t) +
+    return nn * sizeof(sm_real) * (1 + (g->flip ? 3 : 2) * (size_t)g->dim) + g->cap * sizeof(uint64_t) +
            g->hash.cap * (sizeof(uint64_t) + sizeof(uint32_t));
 }
 
@@ -68,14 +66,13 @@ sm_status sm_grid_reserve(sm_grid *g, size_t nblocks) {
     /* Node arrays: contents are not kept (the grid is zeroed after every reserve). 64-byte
      * aligned so that a block's nodes start a cache line: threads writing neighbouring blocks
      * then never share a line. */
-    sm_real **arr[4] = {&g->m, &g->v, &g->f, &g->vt};
-    for (int i = 0; i < (g->separate_vt ? 4 : 3); i++) {
+    sm_real **arr[4] = {&g->mass, &g->vec[0], &g->vec[1], &g->vec[2]};
+    for (int i = 0; i < (g->flip ? 4 : 3); i++) {
         sm_real *q = sm_aligned_alloc(64, nn * (i == 0 ? 1 : d) * sizeof(sm_real));
         if (!q) return SM_ERR_NOMEM;
         free(*arr[i]);
         *arr[i] = q;
     }
-    if (!g->separate_vt) g->vt = g->v;
     g->cap = cap;
     return SM_OK;
 }
@@ -83,12 +80,13 @@ sm_status sm_grid_reserve(sm_grid *g, size_t nblocks) {
 void sm_grid_zero(sm_grid *g, int threads) {
     const size_t bn = (size_t)g->block_nodes, d = (size_t)g->dim;
     long nb = (long)g->nactive;
+    const sm_grid_p2g a = sm_grid_p2g_arrays(g);
     (void)threads;
 #pragma omp parallel for schedule(static) num_threads(threads)
     for (long t = 0; t < nb; t++) {
         size_t b = (size_t)t;
-        memset(g->m + b * bn, 0, bn * sizeof(sm_real));
-        memset(g->v + b * bn * d, 0, bn * d * sizeof(sm_real));
-        memset(g->f + b * bn * d, 0, bn * d * sizeof(sm_real));
+        memset(a.mass + b * bn, 0, bn * sizeof(sm_real));
+        memset(a.momentum + b * bn * d, 0, bn * d * sizeof(sm_real));
+        memset(a.force + b * bn * d, 0, bn * d * sizeof(sm_real));
     }
 }

@@ -7,9 +7,21 @@
  * (2D). Memory and work follow the live blocks, not the domain: a large domain costs what its
  * particles cost. A hash table maps keys to slots (rebuilt each step, grown only when needed).
  *
- * Per node: mass, v (momentum during P2G, then v^n), f (force during P2G, then v-bar), vt
- * (v-tilde, the final velocity). Vectors are stored per node (node*d + axis). Only FLIP needs
- * v^n after the grid update; otherwise vt shares v's storage (v-tilde overwrites v^n). */
+ * Per node the grid stores a mass and two vectors of d values (three with FLIP), node * d + axis.
+ * The vectors hold different quantities in different stages of the step; this table is the one
+ * place that says which (the stages only see the named views below, sm_grid_p2g_arrays and
+ * sm_grid_vel_arrays, never vec[]):
+ *
+ *   storage  P2G writes   grid update / implicit solve writes   G2P reads
+ *   mass     mass         -                                     -
+ *   vec[0]   momentum     v-tilde (v^n with FLIP)               v-tilde (v^n with FLIP)
+ *   vec[1]   force        v-bar                                 v-bar
+ *   vec[2]   -            v-tilde (FLIP only)                   v-tilde (FLIP only)
+ *
+ * i.e. v-bar (pre-friction velocity) takes the force's place and v-tilde (final velocity) the
+ * momentum's: a node's momentum and force are read before its velocities are written. Only FLIP
+ * needs v^n after the grid update (the blend (3.111)), and only FLIP pays for a third vector.
+ * Memory per node is the budget (tests/test_memory.c), hence the reuse. */
 #ifndef SM_GRID_H
 #define SM_GRID_H
 
@@ -81,19 +93,42 @@ typedef struct sm_grid {
     size_t nactive;   /* live blocks this step (slots 0 .. nactive-1) */
     size_t cap;       /* blocks allocated */
     uint64_t *key;    /* per slot, ascending */
-    sm_real *m, *v, *f, *vt;
-    int separate_vt;  /* vt has its own storage (FLIP), else vt == v */
+    sm_real *mass;    /* kg per node */
+    sm_real *vec[3];  /* node vectors: what each holds when is the table above; vec[2] only with FLIP */
+    int flip;         /* FLIP transfer: v^n is kept for G2P (vec[2] allocated) */
     sm_block_hash hash; /* key -> slot of the live blocks */
 } sm_grid;
 
+/* What P2G accumulates into (zeroed by sm_grid_zero): kg, kg m/s, N. */
+typedef struct sm_grid_p2g {
+    sm_real *mass, *momentum, *force;
+} sm_grid_p2g;
+
+/* The grid velocities, m/s, from the grid update (or the implicit solve) on: v^n (FLIP only,
+ * else NULL), v-bar (pre-friction: positions and F^E follow it, §3.6.5) and v-tilde (final:
+ * particle velocities follow it). */
+typedef struct sm_grid_vel {
+    sm_real *vn, *vbar, *vtilde;
+} sm_grid_vel;
+
+static inline sm_grid_p2g sm_grid_p2g_arrays(const sm_grid *g) {
+    sm_grid_p2g a = {g->mass, g->vec[0], g->vec[1]};
+    return a;
+}
+
+static inline sm_grid_vel sm_grid_vel_arrays(const sm_grid *g) {
+    sm_grid_vel a = {g->flip ? g->vec[0] : NULL, g->vec[1], g->flip ? g->vec[2] : g->vec[0]};
+    return a;
+}
+
 /* An empty grid for a domain of nodes[] nodes; no block storage yet. */
-void sm_grid_init(sm_grid *g, int dim, const int nodes[3], int separate_vt);
+void sm_grid_init(sm_grid *g, int dim, const int nodes[3], int flip);
 void sm_grid_free(sm_grid *g);
 /* Bytes held by the grid (allocated blocks and the hash table). */
 size_t sm_grid_bytes(const sm_grid *g);
 /* Makes room for nblocks live blocks (grows geometrically; never shrinks). */
 sm_status sm_grid_reserve(sm_grid *g, size_t nblocks);
-/* Zeroes m, v, f of the live blocks. */
+/* Zeroes what P2G accumulates into (mass, momentum, force) in the live blocks. */
 void sm_grid_zero(sm_grid *g, int threads);
 
 /* Grid coordinates (i,j,k) of a node index. */

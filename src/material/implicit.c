@@ -109,37 +109,19 @@ static sm_real dd_g(sm_real hi, sm_real hj, sm_real K, sm_real mu, sm_real lambd
     return sm_exp(-hj) * (2 * mu * (1 + hi * E) + lambda * K * E);
 }
 
-int sm_implicit_diag(int d, const sm_real *sigma, const sm_implicit_material *mat, sm_real *y,
-                     sm_implicit_mhat *mhat) {
-    SM_ASSERT(d == 2 || d == 3);
-    SM_ASSERT(mat != NULL && mat->mu > 0);
+/* Stage 1 of Mhat (the projection's input): c = max(s, f), eps = ln c, w = [s >= f] / c; then
+ * Zbar = dz/deps (d x d) and h = ln z (the exact exponent of case III, eps otherwise); *p_out is
+ * case III's -scale (0 otherwise). */
+static void projection_jacobian(int d, const sm_real *sigma, const sm_real *z, int cas, const sm_implicit_material *mat,
+                                sm_real c[3], sm_real h[3], sm_real Zbar[9], sm_real *p_out) {
     const sm_real mu = mat->mu, lambda = mat->lambda, f = SM_SIGMA_FLOOR;
-    sm_real z[3], dq;
-    int cas;
-    if (mat->plastic) {
-        cas = sm_dp_project(d, sigma, mat->alpha, mu, lambda, z, &dq);
-    } else {
-        cas = 0;
-        for (int i = 0; i < d; i++) z[i] = sigma[i];
-    }
-    sm_hencky_dpsi(d, z, mu, lambda, y);
-    if (mhat == NULL) return cas;
-
-    for (int i = 0; i < 9; i++) mhat->ybar[i] = 0;
-    for (int k = 0; k < 3; k++) mhat->a[k] = mhat->b[k] = 0;
-    if (cas == 2) return cas; /* y = 0 on an open set: M = 0 */
-
-    /* Stage 1 (projection input): c = max(s, f), eps = ln c, chi1 = [s >= f]. */
-    sm_real c[3], eps[3], w[3];
+    sm_real eps[3], w[3], p = 0;
     for (int i = 0; i < d; i++) {
         int chi = sigma[i] >= f;
         c[i] = chi ? sigma[i] : f;
         eps[i] = sm_log(c[i]);
         w[i] = chi ? 1 / c[i] : 0;
     }
-
-    /* Zbar (d x d) and h = ln z (exact exponent of case III, eps otherwise). */
-    sm_real Zbar[9], h[3], p = 0;
     if (cas == 3) {
         /* same expressions as sm_dp_project, so h is the exponent it used */
         sm_real tr = 0;
@@ -172,10 +154,15 @@ int sm_implicit_diag(int d, const sm_real *sigma, const sm_implicit_material *ma
             for (int j = 0; j < d; j++) Zbar[i * d + j] = i == j ? SM_R(1.0) : SM_R(0.0);
         }
     }
+    *p_out = p;
+}
 
-    /* Stage 2 (energy input z): c2 = max(z, f), h2 = ln c2 (h where not clamped), K2 = sum h2. */
-    sm_real c2[3], h2[3], K2 = 0;
-    int chi2[3];
+/* Stage 2 of Mhat (the energy's input z): c2 = max(z, f), h2 = ln c2 (h where not clamped),
+ * K2 = sum h2, chi2 = [z >= f]; ybar = Wbar Zbar with Wbar = dy/dz. */
+static void energy_jacobian(int d, const sm_real *z, const sm_real *h, const sm_real Zbar[9], sm_real mu,
+                            sm_real lambda, sm_real h2[3], int chi2[3], sm_real *K2_out, sm_real ybar[9]) {
+    const sm_real f = SM_SIGMA_FLOOR;
+    sm_real c2[3], K2 = 0;
     const sm_real lnf = sm_log(f);
     for (int i = 0; i < d; i++) {
         chi2[i] = z[i] >= f;
@@ -194,8 +181,35 @@ int sm_implicit_diag(int d, const sm_real *sigma, const sm_implicit_material *ma
         for (int j = 0; j < d; j++) {
             sm_real s = 0;
             for (int k = 0; k < d; k++) s += Wbar[i * d + k] * Zbar[k * d + j];
-            mhat->ybar[i * d + j] = s;
+            ybar[i * d + j] = s;
         }
+    *K2_out = K2;
+}
+
+int sm_implicit_diag(int d, const sm_real *sigma, const sm_implicit_material *mat, sm_real *y,
+                     sm_implicit_mhat *mhat) {
+    SM_ASSERT(d == 2 || d == 3);
+    SM_ASSERT(mat != NULL && mat->mu > 0);
+    const sm_real mu = mat->mu, lambda = mat->lambda, f = SM_SIGMA_FLOOR;
+    sm_real z[3], dq;
+    int cas;
+    if (mat->plastic) {
+        cas = sm_dp_project(d, sigma, mat->alpha, mu, lambda, z, &dq);
+    } else {
+        cas = 0;
+        for (int i = 0; i < d; i++) z[i] = sigma[i];
+    }
+    sm_hencky_dpsi(d, z, mu, lambda, y);
+    if (mhat == NULL) return cas;
+
+    for (int i = 0; i < 9; i++) mhat->ybar[i] = 0;
+    for (int k = 0; k < 3; k++) mhat->a[k] = mhat->b[k] = 0;
+    if (cas == 2) return cas; /* y = 0 on an open set: M = 0 */
+
+    sm_real c[3], h[3], Zbar[9], p, h2[3], K2;
+    int chi2[3];
+    projection_jacobian(d, sigma, z, cas, mat, c, h, Zbar, &p);
+    energy_jacobian(d, z, h, Zbar, mu, lambda, h2, chi2, &K2, mhat->ybar);
 
     /* Off-diagonal pairs. */
     for (int k = 0; k < npairs(d); k++) {

@@ -542,6 +542,10 @@ static SVD_COLD void svd3_fixup(sm_real U[9], sm_real sigma[3], sm_real V[9], sm
 #define SVD_OPT
 #endif
 
+/* One piece (about 180 lines): steps 1-6 of the header comment pass A's six entries, the
+ * quaternion and B from one step to the next in registers, and the time is the dependency chain of
+ * the rotations (the tuning above is for this function as a whole). The rare paths are out of
+ * line already (svd3_qr_slow, svd3_fixup). */
 SVD_OPT void sm_svd3(const sm_real F[9], sm_real U[9], sm_real sigma[3], sm_real V[9]) {
     sm_real Gs[9];
     const sm_real *G = F;

@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "core/hash.h"
-#include "world_internal.h"
+#include "world/world.h"
 
 sm_emitter_def sm_emitter_def_default(void) {
     sm_emitter_def e;
@@ -146,13 +146,4 @@ double sm_shape_volume_estimate(const sm_shape *shape, const sm_shape *clip, int
                     inside++;
             }
     return (double)inside * cell;
-}
-
-size_t sm_particle_bytes(int dim) {
-    size_t d = (size_t)dim, dd = d * d;
-    /* x, v, B, F, tau (symmetric), vol0, q, alpha; material id; the sort's permutation; the sparse
-     * grid's share: about 1.5 nodes per cell of material (live blocks reach one block beyond
-     * the particles), at 4 particles per cell or more, of 1 + 2d values each (3d with FLIP). */
-    size_t grid = (size_t)(1.5 / 4 * (double)(sizeof(sm_real) * (1 + 2 * d)) + 0.5);
-    return sizeof(sm_real) * (2 * d + 2 * dd + (size_t)(d == 3 ? 6 : 3) + 3) + sizeof(uint16_t) + sizeof(uint32_t) + grid;
 }

@@ -11,7 +11,7 @@
 #include <string.h>
 
 #include "core/hash.h"
-#include "world_internal.h"
+#include "world/world.h"
 
 /* Density of maximal Bridson samples: about K / r^d points per unit volume (measured on
  * boxes of 10 cells a side with this implementation, boundary layer included: tests/test_seed.c). */
@@ -111,30 +111,82 @@ static int seed_jittered(const sm_world *w, const sm_shape *shape, const sm_seed
     return 1;
 }
 
+/* The background grid of the Poisson-disk sampler: cells of side r / sqrt(d) over the box, each
+ * holding at most one sample (its index, or -1). */
+typedef struct pgrid {
+    int32_t *cell;
+    long nc[3];
+    double cs, bmin[3];
+    int d;
+} pgrid;
+
+static void pgrid_cell_of(const pgrid *g, const double x[3], long ci[3]) {
+    for (int a = 0; a < 3; a++) ci[a] = (a < g->d) ? (long)((x[a] - g->bmin[a]) / g->cs) : 0;
+}
+
+static size_t pgrid_index(const pgrid *g, const long ci[3]) {
+    return ((size_t)ci[0] * (size_t)g->nc[1] + (size_t)ci[1]) * (size_t)g->nc[2] + (size_t)ci[2];
+}
+
+/* 1 if no sample lies within r of y: the samples of the 5^d cells around y's cell yc. */
+static int pgrid_clear(const pgrid *g, const ptbuf *all, const double y[3], const long yc[3], double r) {
+    const int d = g->d;
+    for (long di = -2; di <= 2; di++)
+        for (long dj = -2; dj <= 2; dj++)
+            for (long dk = (d == 3 ? -2 : 0); dk <= (d == 3 ? 2 : 0); dk++) {
+                long nb[3] = {yc[0] + di, yc[1] + dj, yc[2] + dk};
+                if (nb[0] < 0 || nb[1] < 0 || nb[2] < 0 || nb[0] >= g->nc[0] || nb[1] >= g->nc[1] || nb[2] >= g->nc[2])
+                    continue;
+                int32_t q = g->cell[pgrid_index(g, nb)];
+                if (q < 0) continue;
+                double dd2 = 0;
+                for (int a = 0; a < d; a++) dd2 += (all->x[3 * q + a] - y[a]) * (all->x[3 * q + a] - y[a]);
+                if (dd2 < r * r) return 0;
+            }
+    return 1;
+}
+
+/* A candidate around sample c at distance r .. 2r in a uniform direction; 0 if outside the box. */
+static int poisson_candidate(int d, const double *c, double r, const double bmin[3], const double bmax[3],
+                             uint64_t *rng, double y[3]) {
+    double dir[3] = {0, 0, 0}, n2 = 0;
+    do { /* uniform direction by rejection in the unit ball */
+        n2 = 0;
+        for (int a = 0; a < d; a++) {
+            *rng = sm_mix64(*rng);
+            dir[a] = 2 * sm_u01(*rng) - 1;
+            n2 += dir[a] * dir[a];
+        }
+    } while (n2 > 1 || n2 < 1e-12);
+    *rng = sm_mix64(*rng);
+    double rad = r * (1 + sm_u01(*rng));
+    int in = 1;
+    y[0] = y[1] = y[2] = 0;
+    for (int a = 0; a < d; a++) {
+        y[a] = c[a] + rad * dir[a] / sqrt(n2);
+        if (y[a] < bmin[a] || y[a] >= bmax[a]) in = 0;
+    }
+    return in;
+}
+
 static int seed_poisson(const sm_world *w, const sm_shape *shape, const sm_seed_def *sd, const double bmin[3],
                         const double bmax[3], ptbuf *out) {
     const int d = w->dim;
     const double K = d == 2 ? SM_POISSON_K2 : SM_POISSON_K3;
     const double r = pow(K * pow(w->def.dx, d) / sd->ppc, 1.0 / d);
-    const double cs = r / sqrt((double)d);
-    long nc[3] = {1, 1, 1};
+    pgrid g = {NULL, {1, 1, 1}, r / sqrt((double)d), {bmin[0], bmin[1], bmin[2]}, d};
     size_t ncell = 1;
     for (int a = 0; a < d; a++) {
-        nc[a] = (long)ceil((bmax[a] - bmin[a]) / cs) + 1;
-        ncell *= (size_t)nc[a];
+        g.nc[a] = (long)ceil((bmax[a] - bmin[a]) / g.cs) + 1;
+        ncell *= (size_t)g.nc[a];
     }
     if (ncell > ((size_t)1 << 31)) return 0;
-    int32_t *cell = sm_malloc(ncell * sizeof(int32_t));
+    g.cell = sm_malloc(ncell * sizeof(int32_t));
     ptbuf all = {0};
     size_t *active = NULL, nact = 0, capact = 0;
-    if (!cell) return 0;
-    for (size_t c = 0; c < ncell; c++) cell[c] = -1;
+    if (!g.cell) return 0;
+    for (size_t c = 0; c < ncell; c++) g.cell[c] = -1;
     uint64_t rng = sd->seed * 0x2545F4914F6CDD1DULL + 1;
-#define CELL_OF(x, ci)                                                                         \
-    do {                                                                                       \
-        for (int a_ = 0; a_ < 3; a_++) ci[a_] = (a_ < d) ? (long)((x[a_] - bmin[a_]) / cs) : 0; \
-    } while (0)
-#define CELL_INDEX(ci) (((size_t)(ci)[0] * (size_t)nc[1] + (size_t)(ci)[1]) * (size_t)nc[2] + (size_t)(ci)[2])
     double x0[3] = {0, 0, 0};
     for (int a = 0; a < d; a++) {
         rng = sm_mix64(rng);
@@ -142,57 +194,29 @@ static int seed_poisson(const sm_world *w, const sm_shape *shape, const sm_seed_
     }
     int ok = ptbuf_push(&all, x0);
     long ci[3];
-    CELL_OF(x0, ci);
-    cell[CELL_INDEX(ci)] = 0;
+    pgrid_cell_of(&g, x0, ci);
+    g.cell[pgrid_index(&g, ci)] = 0;
     active = sm_malloc(1024 * sizeof(size_t));
     capact = 1024;
     if (!active) ok = 0;
     else active[nact++] = 0;
-    while (ok && nact > 0) {
+    while (ok && nact > 0) { /* Bridson: 30 tries around a random active sample */
         rng = sm_mix64(rng);
         size_t ai = (size_t)(sm_u01(rng) * (double)nact);
         if (ai >= nact) ai = nact - 1;
         const double *c = all.x + 3 * active[ai];
         int found = 0;
         for (int t = 0; t < 30 && !found; t++) {
-            double y[3] = {0, 0, 0}, dir[3] = {0, 0, 0}, n2 = 0;
-            do { /* uniform direction by rejection in the unit ball */
-                n2 = 0;
-                for (int a = 0; a < d; a++) {
-                    rng = sm_mix64(rng);
-                    dir[a] = 2 * sm_u01(rng) - 1;
-                    n2 += dir[a] * dir[a];
-                }
-            } while (n2 > 1 || n2 < 1e-12);
-            rng = sm_mix64(rng);
-            double rad = r * (1 + sm_u01(rng));
-            int in = 1;
-            for (int a = 0; a < d; a++) {
-                y[a] = c[a] + rad * dir[a] / sqrt(n2);
-                if (y[a] < bmin[a] || y[a] >= bmax[a]) in = 0;
-            }
-            if (!in) continue;
+            double y[3];
+            if (!poisson_candidate(d, c, r, bmin, bmax, &rng, y)) continue;
             long yc[3];
-            CELL_OF(y, yc);
-            int clear = 1;
-            for (long di = -2; di <= 2 && clear; di++)
-                for (long dj = -2; dj <= 2 && clear; dj++)
-                    for (long dk = (d == 3 ? -2 : 0); dk <= (d == 3 ? 2 : 0) && clear; dk++) {
-                        long nb[3] = {yc[0] + di, yc[1] + dj, yc[2] + dk};
-                        if (nb[0] < 0 || nb[1] < 0 || nb[2] < 0 || nb[0] >= nc[0] || nb[1] >= nc[1] || nb[2] >= nc[2])
-                            continue;
-                        int32_t q = cell[CELL_INDEX(nb)];
-                        if (q < 0) continue;
-                        double dd2 = 0;
-                        for (int a = 0; a < d; a++) dd2 += (all.x[3 * q + a] - y[a]) * (all.x[3 * q + a] - y[a]);
-                        if (dd2 < r * r) clear = 0;
-                    }
-            if (!clear) continue;
+            pgrid_cell_of(&g, y, yc);
+            if (!pgrid_clear(&g, &all, y, yc, r)) continue;
             if (all.n >= INT32_MAX || !ptbuf_push(&all, y)) {
                 ok = 0;
                 break;
             }
-            cell[CELL_INDEX(yc)] = (int32_t)(all.n - 1);
+            g.cell[pgrid_index(&g, yc)] = (int32_t)(all.n - 1);
             if (nact == capact) {
                 size_t *q2 = sm_realloc(active, 2 * capact * sizeof(size_t));
                 if (!q2) {
@@ -207,11 +231,9 @@ static int seed_poisson(const sm_world *w, const sm_shape *shape, const sm_seed_
         }
         if (!found) active[ai] = active[--nact];
     }
-#undef CELL_OF
-#undef CELL_INDEX
     for (size_t i = 0; ok && i < all.n; i++)
         if (keep_point(shape, sd->clip, d, all.x + 3 * i) && !ptbuf_push(out, all.x + 3 * i)) ok = 0;
-    free(cell);
+    free(g.cell);
     free(active);
     free(all.x);
     return ok;

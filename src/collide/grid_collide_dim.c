@@ -1,0 +1,103 @@
+/* Colliders on grid velocities (grid_collide.h), compiled for SM_DIM = 2 and 3.
+ *
+ * GRID_COLLISIONS and FRICTION themselves (Algorithms 7 and 3) are collide.c's; this file runs
+ * them over grid nodes, in double (grid values are converted at the call), with the one rule
+ * that turns a node's collided velocity and contacts into v-bar and v-tilde (node_friction). */
+#include "core/dim.h"
+
+#include "collide/grid_collide.h"
+
+/* Position of grid node ni, m. */
+static inline void node_position(const sm_grid *g, const sm_step_ctx *c, size_t ni, double xi[3]) {
+    int ijk[3];
+    sm_grid_node_coords(g, ni, ijk);
+    xi[0] = xi[1] = xi[2] = 0;
+    for (int a = 0; a < D; a++) xi[a] = (double)c->lo[a] + (double)ijk[a] * (double)c->dx;
+}
+
+/* The rule of grid_collide.h for one node: v holds v-bar on entry (the collided velocity, or the
+ * implicit solution), dv the collision impulse, rec the contacts. Writes v-bar and v-tilde. */
+static inline void node_friction(const sm_grid_colliders *gc, const double xi[3], const sm_node_contact *rec,
+                                 const double dv[3], double v[3], sm_real *vbar, sm_real *vtilde) {
+    for (int a = 0; a < D; a++) vbar[a] = (sm_real)v[a];
+    if (rec->count > 0) {
+        const int stuck = sm_friction_node(gc->cols, D, xi, rec, dv, v);
+        if (stuck && gc->static_sticks)
+            for (int a = 0; a < D; a++) vbar[a] = (sm_real)v[a];
+    }
+    for (int a = 0; a < D; a++) vtilde[a] = (sm_real)v[a];
+}
+
+/* Centre of grid block `slot` (m) and its half-diagonal. */
+static inline double block_center(const sm_grid *g, const sm_step_ctx *c, size_t slot, double ctr[3]) {
+    int bc[3];
+    sm_block_coords(g->key[slot], bc);
+    ctr[0] = ctr[1] = ctr[2] = 0;
+    for (int a = 0; a < D; a++) ctr[a] = (double)c->lo[a] + ((double)(bc[a] << SM_BLOCK_BITS) + 1.5) * (double)c->dx;
+    return 1.5 * (double)c->dx * sqrt((double)D);
+}
+
+/* 1 if no collider can act on any node of a block with centre ctr and half-diagonal R whose
+ * nodes move at most `reach` (m) in the step, contact tolerance included: every collider's signed
+ * distance, at both poses, exceeds R + reach. Signed distances are 1-Lipschitz
+ * (tests/test_collide.c checks it), so the bound at the centre covers every node. */
+static inline int block_free(const sm_collider *cols, int ncol, const double ctr[3], double R, double reach) {
+    for (int b = 0; b < ncol; b++) {
+        if (!(sm_collider_phi(&cols[b], D, 0, ctr, NULL) > R + reach)) return 0;
+        if (!(sm_collider_phi(&cols[b], D, 1, ctr, NULL) > R + reach)) return 0;
+    }
+    return 1;
+}
+
+void SM_FN(sm_grid_collide_block)(const sm_grid_colliders *gc, const sm_grid *g, const sm_step_ctx *c, size_t slot,
+                                  double vmax2, const sm_real *mass, sm_real *vbar, sm_real *vtilde) {
+    const size_t bn = (size_t)g->block_nodes;
+    double ctr[3];
+    const double R = block_center(g, c, slot, ctr);
+    const double reach = c->dt * sqrt(vmax2) + 1e-6 * (1.0 + fabs(ctr[0]) + fabs(ctr[1]) + fabs(ctr[2]) + R);
+    if (block_free(gc->cols, gc->count, ctr, R, reach)) return;
+    for (size_t ni = slot * bn; ni < (slot + 1) * bn; ni++) {
+        if (!(mass[ni] > 0)) continue;
+        double vstar[3] = {0, 0, 0}, v[3] = {0, 0, 0}, xi[3], dv[3];
+        node_position(g, c, ni, xi);
+        for (int a = 0; a < D; a++) v[a] = vstar[a] = (double)vbar[ni * D + a];
+        sm_node_contact rec;
+        sm_collide_node(gc->cols, gc->count, D, xi, c->dt, v, &rec);
+        for (int a = 0; a < 3; a++) dv[a] = v[a] - vstar[a];
+        node_friction(gc, xi, &rec, dv, v, vbar + ni * D, vtilde + ni * D);
+    }
+}
+
+void SM_FN(sm_grid_collide_vector)(const sm_grid_colliders *gc, const sm_grid *g, const sm_step_ctx *c,
+                                   const sm_real *mass, size_t nodes, sm_real *z, sm_node_contact *rec) {
+    const long nl = (long)nodes;
+#pragma omp parallel for schedule(static) num_threads(c->threads)
+    for (long l = 0; l < nl; l++) {
+        sm_node_contact *r = &rec[l];
+        r->sticky = -1;
+        r->count = 0;
+        if (!(mass[l] > 0)) continue;
+        double xi[3], v[3] = {0, 0, 0};
+        node_position(g, c, (size_t)l, xi);
+        for (int a = 0; a < D; a++) v[a] = (double)z[l * D + a];
+        sm_collide_node(gc->cols, gc->count, D, xi, c->dt, v, r);
+        for (int a = 0; a < D; a++) z[l * D + a] = (sm_real)v[a];
+    }
+}
+
+void SM_FN(sm_grid_friction_after_solve)(const sm_grid_colliders *gc, const sm_grid *g, const sm_step_ctx *c,
+                                         size_t nodes, const sm_node_contact *rec,
+                                         const sm_real *solution, const sm_real *vstar, const sm_real *vcollided,
+                                         sm_real *vbar, sm_real *vtilde) {
+    const long nl = (long)nodes;
+#pragma omp parallel for schedule(static) num_threads(c->threads)
+    for (long l = 0; l < nl; l++) {
+        double v[3] = {0, 0, 0}, dv[3] = {0, 0, 0}, xi[3] = {0, 0, 0};
+        for (int a = 0; a < D; a++) {
+            v[a] = (double)solution[l * D + a];
+            dv[a] = (double)vcollided[l * D + a] - (double)vstar[l * D + a];
+        }
+        if (rec[l].count > 0) node_position(g, c, (size_t)l, xi); /* (massless nodes have no contacts) */
+        node_friction(gc, xi, &rec[l], dv, v, vbar + l * D, vtilde + l * D);
+    }
+}

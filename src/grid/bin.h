@@ -1,0 +1,64 @@
+/* Binning particles by grid block (thesis §3.1 step 2, DESIGN §4): the order every transfer
+ * loop runs in.
+ *
+ * A particle belongs to the "particle block" holding its stencil's first node. Its stencil
+ * touches nodes 4 b .. 4 b + 6 per axis only, i.e. the 2^d grid blocks b + {0,1}^d, which are
+ * exactly the live grid blocks (grid.h). Particle blocks of the same colour (block coordinates
+ * equal mod 2) never share a node, so P2G scatters one colour at a time, blocks of a colour in
+ * parallel, particles of a block in order: every node sums its contributions in the same order
+ * for any thread count (bitwise identical results). */
+#ifndef SM_GRID_BIN_H
+#define SM_GRID_BIN_H
+
+#include "core/step_ctx.h"
+#include "grid/grid.h"
+#include "particles/particles.h"
+
+/* A particle block: the particles whose stencil starts in grid block `key`, and the slots of the
+ * live grid blocks b + {0,1}^d they touch: gslot[c] with c = (ci << 2 | cj << 1 | ck) in 3D,
+ * (ci << 1 | cj) in 2D (SM_NO_SLOT outside the domain). */
+typedef struct sm_pblock {
+    uint64_t key;
+    uint32_t start, end;    /* positions in perm */
+    uint32_t gslot[8];
+} sm_pblock;
+
+/* The binning of one step, grown as needed, never shrunk. */
+typedef struct sm_bins {
+    uint32_t *perm;         /* particle indices grouped by particle block, stable (capacity: the
+                               particles', sm_bins_reserve_perm) */
+    size_t perm_cap;
+    sm_pblock *pb;          /* this step's non-empty particle blocks, ascending key */
+    size_t npb, pb_cap;
+    sm_block_hash pb_hash;  /* key -> index in pb (of the last binning: the next one's guess) */
+    uint32_t *counts;       /* per-thread particle counts, then cursors, per block */
+    size_t counts_cap;
+    uint64_t *pairs;        /* (key, index) pairs of the non-empty blocks, sorted by key */
+    size_t pairs_cap;
+    uint32_t *color_blocks; /* particle blocks grouped by colour */
+    size_t color_cap;
+    uint32_t color_count[8], color_offset[9];
+    uint64_t reorders;      /* times the particle storage was reordered by block */
+} sm_bins;
+
+void sm_bins_free(sm_bins *b);
+/* Bytes held. */
+size_t sm_bins_bytes(const sm_bins *b);
+/* Room in perm for cap particles (the particle storage's capacity). */
+sm_status sm_bins_reserve_perm(sm_bins *b, size_t cap);
+
+/* Blocks first..last-1 of `list` (NULL: block indices first..last-1) in T contiguous ranges of
+ * about equal particle counts; range t is [*lo, *hi). P2G, G2P and plasticity all split the
+ * particles this way (blocks and storage are both in key order), so a thread works on the same
+ * particles in every stage: with dynamic scheduling, the cross-core traffic halved the 2-thread
+ * speed whenever the two cores did not share a cache. */
+void sm_bins_range(const sm_bins *b, const uint32_t *list, long first, long last, int T, int t, long *lo, long *hi);
+
+#ifdef SM_DIM
+/* Bins the particles by block: fills perm, the particle blocks, their colour lists, the live grid
+ * blocks (zeroed for P2G: sm_grid_zero) and every block's grid slots; reorders the particle
+ * storage (every field) by block when a block's particles are no longer mostly contiguous. */
+sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c);
+#endif
+
+#endif

@@ -1,0 +1,279 @@
+/* Binning particles by grid block (see bin.h), compiled for SM_DIM = 2 and 3.
+ *
+ * A stable counting sort by particle block, in the steps below. Block keys are recomputed from
+ * positions where needed, never stored per particle (memory per particle is the budget). The
+ * previous step's blocks are the first guess: particles move less than a cell per step (CFL), so
+ * new blocks are rare and are found in a serial pass in particle order (deterministic).
+ *   1. count_known_blocks: each thread counts its contiguous share of the particles per known
+ *      block (read-only hash lookups; consecutive particles mostly share a block);
+ *   2. add_new_blocks: blocks not known yet, in particle order; then step 1 again;
+ *   3. sort_blocks + scatter_particles + publish_blocks: the non-empty blocks in ascending key
+ *      order, per-thread cursors, perm (stable), the new block list and its hash;
+ *   4. live_grid_blocks + link_grid_slots: the 2^d grid blocks of every particle block, in
+ *      ascending key order, zeroed for P2G; each particle block's slots;
+ *   5. colour_lists: particle blocks grouped by colour for the race-free scatter;
+ *   6. reorder_if_scattered: move the particle storage into block order when a block's
+ *      particles are no longer mostly contiguous (every later pass then streams). */
+#include "core/dim.h"
+
+#include <string.h>
+
+#include "grid/bin.h"
+#include "transfer/kernel.h"
+
+static inline uint64_t particle_key(const sm_step_ctx *c, const sm_real *xp, int S) {
+    int bb[3] = {0, 0, 0};
+    for (int a = 0; a < D; a++) bb[a] = sm_kernel_base(S, (xp[a] - c->lo[a]) * c->inv_dx) >> SM_BLOCK_BITS;
+    return sm_block_key(bb[0], bb[1], bb[2]);
+}
+
+static inline int key_color(uint64_t key) {
+    int b[3];
+    sm_block_coords(key, b);
+    return (b[0] & 1) | ((b[1] & 1) << 1) | ((D == 3 ? (b[2] & 1) : 0) << 2);
+}
+
+static int cmp_u64(const void *a, const void *b) {
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+static sm_status grow(void **ptr, size_t *cap, size_t need, size_t elem) {
+    if (need <= *cap) return SM_OK;
+    size_t c = *cap ? *cap : 64;
+    while (c < need) c += c / 2;
+    void *q = sm_realloc(*ptr, c * elem);
+    if (!q) return SM_ERR_NOMEM;
+    *ptr = q;
+    *cap = c;
+    return SM_OK;
+}
+
+/* Thread t's share of the n particles: [p0, p1). */
+static inline void thread_share(size_t n, int T, int t, size_t *p0, size_t *p1) {
+    *p0 = n * (size_t)t / (size_t)T;
+    *p1 = n * (size_t)(t + 1) / (size_t)T;
+}
+
+/* 1. counts[t * npb + block] = thread t's particles in each known block; returns the particles
+ * whose block is not known. */
+static sm_status count_known_blocks(sm_bins *b, const sm_real *x, size_t n, const sm_step_ctx *c, int T,
+                                    long *misses_out) {
+    const size_t nb = b->npb;
+    const int S = c->stencil;
+    if (grow((void **)&b->counts, &b->counts_cap, (size_t)T * nb + 1, sizeof(uint32_t)) != SM_OK) return SM_ERR_NOMEM;
+    uint32_t *cnt = b->counts;
+    const sm_block_hash *ph = &b->pb_hash;
+    memset(cnt, 0, (size_t)T * nb * sizeof(uint32_t));
+    long misses = 0;
+#pragma omp parallel for schedule(static, 1) reduction(+ : misses) num_threads(T)
+    for (int t = 0; t < T; t++) {
+        size_t p0, p1;
+        thread_share(n, T, t, &p0, &p1);
+        uint32_t *ct = cnt + (size_t)t * nb;
+        uint64_t last = UINT64_MAX;
+        uint32_t slot = SM_NO_SLOT;
+        for (size_t p = p0; p < p1; p++) {
+            uint64_t k = particle_key(c, x + p * D, S);
+            if (k != last) {
+                last = k;
+                slot = sm_block_hash_find(ph, k);
+            }
+            if (slot == SM_NO_SLOT) misses++;
+            else ct[slot]++;
+        }
+    }
+    *misses_out = misses;
+    return SM_OK;
+}
+
+/* 2. Appends the blocks not known yet, in particle order (serial: deterministic). */
+static sm_status add_new_blocks(sm_bins *b, const sm_real *x, size_t n, const sm_step_ctx *c) {
+    sm_block_hash *ph = &b->pb_hash;
+    size_t nb = b->npb;
+    uint64_t last = UINT64_MAX;
+    for (size_t p = 0; p < n; p++) {
+        uint64_t k = particle_key(c, x + p * D, c->stencil);
+        if (k == last) continue;
+        last = k;
+        if (sm_block_hash_find(ph, k) != SM_NO_SLOT) continue;
+        if (grow((void **)&b->pb, &b->pb_cap, nb + 1, sizeof *b->pb) != SM_OK) return SM_ERR_NOMEM;
+        if (ph->cap < 2 * (nb + 1)) {
+            if (sm_block_hash_reserve(ph, nb + 1) != SM_OK) return SM_ERR_NOMEM;
+            for (size_t q = 0; q < nb; q++) sm_block_hash_put(ph, b->pb[q].key, (uint32_t)q);
+        }
+        sm_block_hash_put(ph, k, (uint32_t)nb);
+        b->pb[nb++].key = k;
+    }
+    b->npb = nb;
+    return SM_OK;
+}
+
+/* 3a. The non-empty blocks as (key, index) pairs in ascending key order; counts become each
+ * thread's first position in perm per block (thread t's particles of a block follow those of
+ * threads < t: stable). Returns the number of non-empty blocks. */
+static size_t sort_blocks(sm_bins *b, int T) {
+    const size_t nb = b->npb;
+    uint32_t *cnt = b->counts;
+    uint64_t *pairs = b->pairs;
+    size_t nne = 0;
+    for (size_t k = 0; k < nb; k++) {
+        uint32_t total = 0;
+        for (int t = 0; t < T; t++) total += cnt[(size_t)t * nb + k];
+        if (total) {
+            pairs[2 * nne] = b->pb[k].key;
+            pairs[2 * nne + 1] = k;
+            nne++;
+        }
+    }
+    qsort(pairs, nne, 2 * sizeof(uint64_t), cmp_u64); /* (key, index) pairs, by key */
+    uint32_t pos = 0;
+    for (size_t r = 0; r < nne; r++) {
+        size_t k = (size_t)pairs[2 * r + 1];
+        for (int t = 0; t < T; t++) {
+            uint32_t m = cnt[(size_t)t * nb + k];
+            cnt[(size_t)t * nb + k] = pos;
+            pos += m;
+        }
+    }
+    return nne;
+}
+
+/* 3b. perm: every particle at its thread's cursor of its block. */
+static void scatter_particles(sm_bins *b, const sm_real *x, size_t n, const sm_step_ctx *c, int T) {
+    const size_t nb = b->npb;
+    const int S = c->stencil;
+    const sm_block_hash *ph = &b->pb_hash;
+    uint32_t *cnt = b->counts, *perm = b->perm;
+#pragma omp parallel for schedule(static, 1) num_threads(T)
+    for (int t = 0; t < T; t++) {
+        size_t p0, p1;
+        thread_share(n, T, t, &p0, &p1);
+        uint32_t *ct = cnt + (size_t)t * nb;
+        uint64_t last = UINT64_MAX;
+        uint32_t slot = 0;
+        for (size_t p = p0; p < p1; p++) {
+            uint64_t k = particle_key(c, x + p * D, S);
+            if (k != last) {
+                last = k;
+                slot = sm_block_hash_find(ph, k);
+            }
+            perm[ct[slot]++] = (uint32_t)p;
+        }
+    }
+}
+
+/* 3c. The new block list (ascending key, with its range in perm) and its hash. After the
+ * scatter, the last thread's cursors are the blocks' ends. */
+static void publish_blocks(sm_bins *b, size_t nne, int T) {
+    const size_t nb = b->npb;
+    uint64_t *pairs = b->pairs;
+    uint32_t start = 0;
+    for (size_t r = 0; r < nne; r++) {
+        size_t k = (size_t)pairs[2 * r + 1];
+        uint32_t end = b->counts[(size_t)(T - 1) * nb + k];
+        pairs[2 * r + 1] = ((uint64_t)start << 32) | end;
+        start = end;
+    }
+    for (size_t r = 0; r < nne; r++) {
+        b->pb[r].key = pairs[2 * r];
+        b->pb[r].start = (uint32_t)(pairs[2 * r + 1] >> 32);
+        b->pb[r].end = (uint32_t)pairs[2 * r + 1];
+    }
+    b->npb = nne;
+    sm_block_hash_clear(&b->pb_hash);
+    for (size_t r = 0; r < nne; r++) sm_block_hash_put(&b->pb_hash, b->pb[r].key, (uint32_t)r);
+}
+
+/* Key of grid block cb (0 .. 2^d - 1) of particle block bc; 0 in *inside if outside the domain. */
+static inline uint64_t neighbour_key(const sm_grid *g, const int bc[3], int cb, int *inside) {
+    int o[3] = {0, 0, 0};
+    for (int a = 0; a < D; a++) o[a] = bc[a] + ((cb >> (D - 1 - a)) & 1);
+    *inside = o[0] < g->blocks[0] && o[1] < g->blocks[1] && o[2] < g->blocks[2];
+    return sm_block_key(o[0], o[1], o[2]);
+}
+
+/* 4a. The live grid blocks: the 2^d neighbours (+0/+1 per axis) of every particle block, in
+ * ascending key order (slot order), and the grid's hash of them. */
+static sm_status live_grid_blocks(const sm_bins *b, sm_grid *g) {
+    sm_block_hash *gh = &g->hash;
+    if (sm_block_hash_reserve(gh, b->npb * NGB) != SM_OK) return SM_ERR_NOMEM;
+    sm_block_hash_clear(gh);
+    for (size_t r = 0; r < b->npb; r++) {
+        int bc[3], inside;
+        sm_block_coords(b->pb[r].key, bc);
+        for (int cb = 0; cb < NGB; cb++) {
+            const uint64_t key = neighbour_key(g, bc, cb, &inside);
+            if (inside) sm_block_hash_put(gh, key, 0);
+        }
+    }
+    size_t ng = 0;
+    for (size_t i = 0; i < gh->cap; i++) ng += gh->key[i] != UINT64_MAX;
+    if (sm_grid_reserve(g, ng) != SM_OK) return SM_ERR_NOMEM;
+    size_t k = 0;
+    for (size_t i = 0; i < gh->cap; i++)
+        if (gh->key[i] != UINT64_MAX) g->key[k++] = gh->key[i];
+    qsort(g->key, ng, sizeof(uint64_t), cmp_u64);
+    sm_block_hash_clear(gh);
+    for (size_t s = 0; s < ng; s++) sm_block_hash_put(gh, g->key[s], (uint32_t)s);
+    g->nactive = ng;
+    return SM_OK;
+}
+
+/* 4b. Every particle block's grid slots (SM_NO_SLOT outside the domain and past 2^d). */
+static void link_grid_slots(sm_bins *b, const sm_grid *g) {
+    for (size_t r = 0; r < b->npb; r++) {
+        int bc[3], inside;
+        sm_block_coords(b->pb[r].key, bc);
+        for (int cb = 0; cb < NGB; cb++) b->pb[r].gslot[cb] = sm_block_hash_find(&g->hash, neighbour_key(g, bc, cb, &inside));
+        for (int cb = NGB; cb < 8; cb++) b->pb[r].gslot[cb] = SM_NO_SLOT;
+    }
+}
+
+/* 5. The particle blocks grouped by colour (ascending key within a colour). */
+static sm_status colour_lists(sm_bins *b) {
+    const size_t nne = b->npb;
+    if (grow((void **)&b->color_blocks, &b->color_cap, nne, sizeof(uint32_t)) != SM_OK) return SM_ERR_NOMEM;
+    memset(b->color_count, 0, sizeof b->color_count);
+    for (size_t r = 0; r < nne; r++) b->color_count[key_color(b->pb[r].key)]++;
+    b->color_offset[0] = 0;
+    for (int col = 0; col < 8; col++) b->color_offset[col + 1] = b->color_offset[col] + b->color_count[col];
+    uint32_t cursor[8];
+    for (int col = 0; col < 8; col++) cursor[col] = b->color_offset[col];
+    for (size_t r = 0; r < nne; r++) b->color_blocks[cursor[key_color(b->pb[r].key)]++] = (uint32_t)r;
+    return SM_OK;
+}
+
+/* 6. Reorders the storage when the particles of a block are no longer mostly contiguous (fewer
+ * than 16 in a row on average); perm becomes the identity. */
+static void reorder_if_scattered(sm_bins *b, sm_particles *P) {
+    const size_t n = P->n;
+    size_t breaks = 0;
+    for (size_t i = 1; i < n; i++) breaks += b->perm[i] != b->perm[i - 1] + 1;
+    if (breaks * 16 > n) {
+        sm_particles_permute(P, D, b->perm);
+        b->reorders++;
+    }
+}
+
+sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c) {
+    const size_t n = P->n;
+    const int T = c->threads > 0 ? c->threads : 1;
+    long misses = 0;
+    if (count_known_blocks(b, P->x, n, c, T, &misses) != SM_OK) return SM_ERR_NOMEM;
+    if (misses > 0) {
+        if (add_new_blocks(b, P->x, n, c) != SM_OK) return SM_ERR_NOMEM;
+        if (count_known_blocks(b, P->x, n, c, T, &misses) != SM_OK) return SM_ERR_NOMEM;
+        SM_ASSERT(misses == 0);
+    }
+    if (grow((void **)&b->pairs, &b->pairs_cap, 2 * b->npb + 2, sizeof(uint64_t)) != SM_OK) return SM_ERR_NOMEM;
+    const size_t nne = sort_blocks(b, T);
+    scatter_particles(b, P->x, n, c, T);
+    publish_blocks(b, nne, T);
+    if (live_grid_blocks(b, g) != SM_OK) return SM_ERR_NOMEM;
+    link_grid_slots(b, g);
+    sm_grid_zero(g, T);
+    if (colour_lists(b) != SM_OK) return SM_ERR_NOMEM;
+    reorder_if_scattered(b, P);
+    return SM_OK;
+}

@@ -1,0 +1,39 @@
+/* The explicit grid update (explicit.h), compiled for SM_DIM = 2 and 3.
+ *
+ *   v^n_i = (mv)_i / m_i,   v*_i = v^n_i + dt (f_i / m_i + g)        (3.92)
+ * then, per node with mass, GRID_COLLISIONS and FRICTION (collide/grid_collide.h) give v-bar and
+ * v-tilde; where no collider can reach a block this step, v-bar = v-tilde = v*. Nodes without
+ * mass get zero velocities. Blocks are independent: a static split over the threads. */
+#include "core/dim.h"
+
+#include "integrate/explicit.h"
+
+void SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c) {
+    const sm_grid *g = io->grid;
+    const long nb = (long)g->nactive;
+    const size_t bn = (size_t)g->block_nodes;
+    const sm_real dtr = (sm_real)c->dt;
+    const sm_real *mass = io->in.mass, *momentum = io->in.momentum, *force = io->in.force;
+    sm_real *vn_out = io->out.vn, *vbar = io->out.vbar, *vtilde = io->out.vtilde;
+#pragma omp parallel for schedule(static) num_threads(c->threads)
+    for (long t = 0; t < nb; t++) {
+        const size_t b = (size_t)t;
+        /* v^n, v* (into v-bar and v-tilde: their values where no collider acts) and the largest |v*|. */
+        double vmax2 = 0;
+        for (size_t ni = b * bn; ni < (b + 1) * bn; ni++) {
+            sm_real m = mass[ni];
+            sm_real inv_m = m > 0 ? SM_R(1.0) / m : 0;
+            sm_real s2 = 0;
+            for (int a = 0; a < D; a++) {
+                sm_real vn = momentum[ni * D + a] * inv_m;
+                sm_real vs = m > 0 ? vn + dtr * (force[ni * D + a] * inv_m + c->gravity[a]) : 0;
+                if (vn_out) vn_out[ni * D + a] = vn;
+                vbar[ni * D + a] = vs;
+                vtilde[ni * D + a] = vs;
+                s2 += vs * vs;
+            }
+            if ((double)s2 > vmax2) vmax2 = (double)s2;
+        }
+        SM_FN(sm_grid_collide_block)(&io->colliders, g, c, b, vmax2, mass, vbar, vtilde);
+    }
+}

@@ -1,0 +1,209 @@
+/* The operators of the implicit solve (implicit_solver.h), compiled for SM_DIM = 2 and 3.
+ *
+ * Thesis §3.6.2.2, Algorithms 5, 6, 8, Appendix A.5. Unknowns: grid velocities z on the nodes of
+ * the live blocks (nodes without mass held at zero). With
+ *   F_p(z) = (I + dt sum_i z_i grad w_ip^T) F_p^n,
+ *   G_p(z) = V0 Y(F_p(z)) F_p^nT        (Y: first Piola stress of the Drucker-Prager projected F,
+ *                                        material/implicit.h),
+ * the residual of Algorithm 5 is
+ *   y_i(z) = z_i - v_i^n - dt g + (dt / m_i) sum_p G_p(z) grad w_ip,
+ * evaluated at collided velocities and pruned (sticky rows zeroed, contact normals removed: the
+ * projection P). Its derivative, TIMES_DIFF (Algorithm 6), is
+ *   J dz = P(dz' + (dt^2/m) sum_p apply_p(sum_i dz'_i grad w_ip^T) grad w_ip),  dz' = P dz,
+ * with apply_p from Algorithm 8's per-particle precompute (sm_implicit_apply). FORCE_INCREMENT_VEL
+ * gives v* = v^n + dt g - (dt/m) sum_p G_p(z) grad w_ip.
+ * Dot products are mass-weighted, summed per live block and then in block order: bitwise the
+ * same for any thread count. Scatters use P2G's colour schedule. */
+#include "core/dim.h"
+
+#include <string.h>
+
+#include "integrate/implicit_solver.h"
+#include "transfer/stencil_dim.h"
+
+double SM_FN(sm_imp_dot)(const sm_implicit_sys *s, const sm_real *a, const sm_real *b) {
+    const sm_implicit_ws *ws = s->ws;
+    const long nb = (long)s->grid->nactive;
+#pragma omp parallel for schedule(static) num_threads(s->c->threads)
+    for (long t = 0; t < nb; t++) {
+        double sum = 0;
+        for (size_t l = (size_t)t * BN; l < (size_t)(t + 1) * BN; l++) {
+            double m = (double)ws->mass[l];
+            if (!(m > 0)) continue;
+            for (int k = 0; k < D; k++) sum += m * (double)a[l * D + k] * (double)b[l * D + k];
+        }
+        ws->partial[t] = sum;
+    }
+    double sum = 0;
+    for (long t = 0; t < nb; t++) sum += ws->partial[t];
+    return sum;
+}
+
+/* Particle p's T = sum_i z_i grad w^T from a grid vector (p of particle block pb). */
+static inline __attribute__((always_inline)) void gather_T(const sm_implicit_sys *s, int S, size_t p,
+                                                          const sm_pblock *pb, const sm_real *z, sm_real *T) {
+    weights W;
+    int bc[3];
+    pblock_origin(pb, bc);
+    kernel_weights(S, s->x + p * D, s->c, bc, &W);
+    for (int k = 0; k < DD; k++) T[k] = 0;
+    STENCIL_BEGIN(S, W, pb)
+    (void)wgt;
+    for (int a = 0; a < D; a++)
+        for (int e = 0; e < D; e++) T[a * D + e] += z[ni * D + a] * gw[e];
+    STENCIL_END
+}
+
+/* out_i = sum_p M_p grad w_ip, with M_p from `mats` (n x DD), scattered in the colour schedule. */
+static void scatter(const sm_implicit_sys *s, const sm_real *mats, sm_real *out) {
+    const int S = s->c->stencil;
+    const sm_bins *bins = s->bins;
+    memset(out, 0, s->nodes * D * sizeof(sm_real));
+    for (int col = 0; col < NCOLORS; col++) {
+        const long first = (long)bins->color_offset[col], last = (long)bins->color_offset[col + 1];
+#pragma omp parallel for schedule(dynamic, 1) num_threads(s->c->threads)
+        for (long t = first; t < last; t++) {
+            const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
+            int bc[3];
+            pblock_origin(pb, bc);
+            for (uint32_t idx = pb->start; idx < pb->end; idx++) {
+                const size_t p = bins->perm[idx];
+                weights W;
+                kernel_weights(S, s->x + p * D, s->c, bc, &W);
+                const sm_real *M = mats + p * DD;
+                STENCIL_BEGIN(S, W, pb)
+                (void)wgt;
+                for (int a = 0; a < D; a++) {
+                    sm_real acc = 0;
+                    for (int e = 0; e < D; e++) acc += M[a * D + e] * gw[e];
+                    out[ni * D + a] += acc;
+                }
+                STENCIL_END
+            }
+        }
+    }
+}
+
+static inline sm_implicit_material particle_material(const sm_implicit_sys *s, size_t p) {
+    const sm_material_rt *m = &s->mats[s->mat[p]];
+    sm_implicit_material im;
+    im.mu = m->law.mu;
+    im.lambda = m->law.lambda;
+    im.alpha = s->alpha[p];
+    im.plastic = m->law.plastic;
+    return im;
+}
+
+void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, const sm_real *z, int pre) {
+    sm_implicit_ws *ws = s->ws;
+    const int S = s->c->stencil;
+    const sm_bins *bins = s->bins;
+    const long nb = (long)bins->npb;
+    const sm_real dt = (sm_real)s->c->dt;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(s->c->threads)
+    for (long b = 0; b < nb; b++)
+        for (uint32_t i = bins->pb[b].start; i < bins->pb[b].end; i++) {
+            size_t p = bins->perm[i];
+            sm_real T[DD];
+            if (S == 3) gather_T(s, 3, p, &bins->pb[b], z, T);
+            else gather_T(s, 4, p, &bins->pb[b], z, T);
+            sm_implicit_material im = particle_material(s, p);
+            if (pre) sm_implicit_precompute(D, s->F + p * DD, dt, T, s->vol0[p], &im, &ws->pp[p], ws->G + p * DD);
+            else sm_implicit_force_matrix(D, s->F + p * DD, dt, T, s->vol0[p], &im, ws->G + p * DD);
+        }
+    scatter(s, ws->G, ws->force);
+}
+
+void SM_FN(sm_imp_collide)(const sm_implicit_sys *s, sm_real *z) {
+    SM_FN(sm_grid_collide_vector)(&s->colliders, s->grid, s->c, s->ws->mass, s->nodes, z, s->ws->contact);
+}
+
+/* Removes contact k of rec (PRUNE_COLLISIONS). */
+static void forget_contact(sm_node_contact *rec, int k) {
+    for (int j = k; j + 1 < rec->count; j++) {
+        rec->stick[j] = rec->stick[j + 1];
+        rec->body[j] = rec->body[j + 1];
+        memcpy(rec->n[j], rec->n[j + 1], sizeof rec->n[j]);
+    }
+    rec->count--;
+}
+
+void SM_FN(sm_imp_project)(const sm_implicit_sys *s, sm_real *y, int prune) {
+    sm_implicit_ws *ws = s->ws;
+    const sm_collider *cols = s->colliders.cols;
+    const long nl = (long)s->nodes;
+#pragma omp parallel for schedule(static) num_threads(s->c->threads)
+    for (long l = 0; l < nl; l++) {
+        sm_node_contact *rec = &ws->contact[l];
+        sm_real *v = y + l * D;
+        if (!(ws->mass[l] > 0) || rec->sticky >= 0) {
+            for (int a = 0; a < D; a++) v[a] = 0;
+            continue;
+        }
+        for (int k = 0; k < rec->count; k++) {
+            const double *nrm = rec->n[k];
+            double vn = 0;
+            for (int a = 0; a < D; a++) vn += (double)v[a] * nrm[a];
+            /* A separating contact whose residual points away (y . n < 0) is forgotten first. */
+            if (prune && (cols[rec->body[k]].def.mode == SM_COLLIDE_SEPARATE || rec->stick[k]) && vn < 0) {
+                forget_contact(rec, k);
+                k--;
+                continue;
+            }
+            for (int a = 0; a < D; a++) v[a] = (sm_real)((double)v[a] - vn * nrm[a]);
+        }
+    }
+}
+
+void SM_FN(sm_imp_residual)(const sm_implicit_sys *s, const sm_real *z, sm_real *y) {
+    const sm_implicit_ws *ws = s->ws;
+    const sm_real dt = (sm_real)s->c->dt;
+    const sm_real *g = s->c->gravity;
+    for (size_t l = 0; l < s->nodes; l++) {
+        sm_real m = ws->mass[l];
+        for (int a = 0; a < D; a++)
+            y[l * D + a] = m > 0 ? z[l * D + a] - ws->vn[l * D + a] - dt * g[a] + dt / m * ws->force[l * D + a] : 0;
+    }
+}
+
+void SM_FN(sm_imp_force_increment)(const sm_implicit_sys *s, const sm_real *z, sm_real *vstar) {
+    const sm_implicit_ws *ws = s->ws;
+    const sm_real dt = (sm_real)s->c->dt;
+    const sm_real *g = s->c->gravity;
+    SM_FN(sm_imp_forces)(s, z, 0);
+    for (size_t l = 0; l < s->nodes; l++)
+        for (int a = 0; a < D; a++)
+            vstar[l * D + a] = ws->mass[l] > 0 ? ws->vn[l * D + a] + dt * g[a] - dt / ws->mass[l] * ws->force[l * D + a] : 0;
+}
+
+double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, const sm_real *z, sm_real *y) {
+    SM_FN(sm_imp_forces)(s, z, 0);
+    SM_FN(sm_imp_residual)(s, z, y);
+    SM_FN(sm_imp_project)(s, y, 1);
+    return SM_FN(sm_imp_dot)(s, y, y);
+}
+
+void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_real *out, sm_real *px) {
+    sm_implicit_ws *ws = s->ws;
+    const int S = s->c->stencil;
+    const sm_bins *bins = s->bins;
+    const long nb = (long)bins->npb;
+    memcpy(px, x, s->nodes * D * sizeof(sm_real));
+    SM_FN(sm_imp_project)(s, px, 0);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(s->c->threads)
+    for (long b = 0; b < nb; b++)
+        for (uint32_t i = bins->pb[b].start; i < bins->pb[b].end; i++) {
+            size_t p = bins->perm[i];
+            sm_real T1[DD];
+            if (S == 3) gather_T(s, 3, p, &bins->pb[b], px, T1);
+            else gather_T(s, 4, p, &bins->pb[b], px, T1);
+            sm_implicit_apply(D, &ws->pp[p], T1, ws->G + p * DD); /* the Hessian product, in G's place */
+        }
+    scatter(s, ws->G, out);
+    const sm_real dt2 = (sm_real)(s->c->dt * s->c->dt);
+    for (size_t l = 0; l < s->nodes; l++) {
+        sm_real m = ws->mass[l];
+        for (int a = 0; a < D; a++) out[l * D + a] = m > 0 ? px[l * D + a] + dt2 / m * out[l * D + a] : 0;
+    }
+    SM_FN(sm_imp_project)(s, out, 0);
+}

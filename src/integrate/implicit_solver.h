@@ -1,0 +1,121 @@
+/* The implicit grid solve (thesis §3.6.2.2, Algorithms 5, 6 and 8; stages 4-5 of the step with
+ * integrator = implicit): after a P2G without forces, Newton's method with GMRES on the grid
+ * velocities, plasticity inside the force; then collisions and friction as the explicit update
+ * does. The equations are at the top of implicit_ops_dim.c (operators) and implicit_dim.c
+ * (Newton, line search, GMRES).
+ *
+ * Seams: the operators read one struct, sm_implicit_sys (what the system is); the solver's
+ * vectors are the workspace's named vectors. A preconditioner is one more operator on the same
+ * struct and one more vector. */
+#ifndef SM_INTEGRATE_IMPLICIT_SOLVER_H
+#define SM_INTEGRATE_IMPLICIT_SOLVER_H
+
+#include "collide/grid_collide.h"
+#include "grid/bin.h"
+#include "material/implicit.h"
+#include "material/material_rt.h"
+
+/* Workspace of the implicit solve, grown as needed, never shrunk. Node vectors hold d values per
+ * node of the live grid blocks, in grid node order (mass: one). Storage is reused between the
+ * phases of a solve; what each holds when (every function names its arguments for the quantity
+ * it is given; this is the one place that says which storage is passed):
+ *
+ *   storage  initial guess                Newton iteration                    finish (Alg. 5, l. 3-5)
+ *   mass     node mass m_i (0 where none), the whole step
+ *   vn       v^n, the whole step
+ *   force    sum_p G_p grad w_ip at the velocities of the last force evaluation
+ *   z        explicit predictor, then     the iterate (collided)              v-bar = the solution
+ *            the better guess
+ *   y        the guesses' residuals       residual y(z); negated: GMRES rhs   -
+ *   dz       guess v^n + dt g             Newton step (GMRES's solution)      GRID_COLLISIONS(v*)
+ *   aux      -                            GMRES: TIMES_DIFF's P x;            v*
+ *                                         line search: the trial's residual
+ *   krylov   -                            GMRES: K+1 basis vectors;           -
+ *                                         line search: z before the step
+ *   contact  contacts of the last GRID_COLLISIONS (of z; at the finish, of v*)
+ *   pp, G    per particle: Algorithm 8's precompute at z; G_p(z) (GMRES overwrites G with the
+ *            Hessian products, so the line search recomputes G before reading it)
+ *   partial  per-live-block partial sums (deterministic dot products) */
+typedef struct sm_implicit_ws {
+    size_t ncap;                 /* nodes the vectors hold */
+    int kcap;                    /* Krylov vectors allocated */
+    size_t pcap;                 /* particles pp and G hold */
+    size_t partial_cap;          /* live blocks partial holds */
+    sm_real *mass, *vn, *force, *z, *y, *dz, *aux, *krylov;
+    sm_node_contact *contact;
+    sm_implicit_particle *pp;
+    sm_real *G;
+    double *partial;
+} sm_implicit_ws;
+
+/* Room for `nodes` nodes in `nblocks` live blocks, K + 1 Krylov vectors and np particles. */
+sm_status sm_implicit_ws_reserve(sm_implicit_ws *ws, int dim, size_t nodes, size_t nblocks, size_t np, int K);
+void sm_implicit_ws_free(sm_implicit_ws *ws);
+size_t sm_implicit_ws_bytes(const sm_implicit_ws *ws, int dim);
+
+/* Counters of the implicit solves (sm_diagnostics). */
+typedef struct sm_implicit_stats {
+    uint64_t newton_total, gmres_total, unconverged;
+    int last_iterations;         /* Newton steps of the last solve */
+    double last_norm;            /* its final residual norm sqrt(sum m |y|^2 / sum m), m/s */
+    double last_residual;        /* the same over dt, m/s^2 */
+    double hist[64];             /* residual (m/s^2) of each Newton step of the last solve */
+} sm_implicit_stats;
+
+/* What the system reads: the particles at the step start, their binning, the live grid and the
+ * colliders (the operators of implicit_ops_dim.c take this and vectors, nothing else). */
+typedef struct sm_implicit_sys {
+    const sm_step_ctx *c;
+    size_t n;                    /* particles */
+    const sm_real *x, *F, *vol0, *alpha; /* positions, F^E at t^n, initial volumes, alpha */
+    const uint16_t *mat;
+    const sm_material_rt *mats;
+    const sm_bins *bins;
+    const sm_grid *grid;         /* live blocks: node positions */
+    size_t nodes;                /* node vectors' length: live blocks * 4^d */
+    sm_grid_colliders colliders;
+    sm_implicit_ws *ws;          /* mass, vn, contacts, pp, G, force, partial */
+} sm_implicit_sys;
+
+/* The implicit stage: reads P2G's mass and momentum (P2G without force), writes v^n (FLIP
+ * only), v-bar and v-tilde where the explicit grid update does. */
+typedef struct sm_implicit_io {
+    sm_implicit_sys sys;         /* c and nodes are filled by the solve */
+    sm_grid_p2g in;
+    sm_grid_vel out;
+    double newton_tolerance;     /* def.newton_tolerance, m/s^2 */
+    int newton_max_iterations, gmres_max_iterations;
+    double gmres_tolerance;
+    sm_implicit_stats *stats;
+} sm_implicit_io;
+
+#ifdef SM_DIM
+/* SM_ERR_NOMEM (workspace) or SM_ERR_NUMERICAL (the residual is not finite: stats->last_norm). */
+sm_status SM_FN(sm_implicit_solve)(const sm_implicit_io *io, const sm_step_ctx *c);
+/* Test hook: at random grid velocities z (scale vscale), the relative error of TIMES_DIFF
+ * against the central difference of the unprojected residual with step h (no collider may touch
+ * the nodes; P2G without force must have run). */
+double SM_FN(sm_implicit_jvp_check)(const sm_implicit_io *io, const sm_step_ctx *c, uint64_t seed, double vscale,
+                                    double h);
+
+/* The operators (implicit_ops_dim.c). Vectors have s->nodes nodes. */
+double SM_FN(sm_imp_dot)(const sm_implicit_sys *s, const sm_real *a, const sm_real *b);
+/* G_p at velocities z for every particle (and Algorithm 8's precompute if pre), then
+ * ws->force = sum_p G_p grad w_ip. */
+void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, const sm_real *z, int pre);
+/* y = z - v^n - dt g + (dt/m) ws->force, nodes with mass (0 elsewhere). */
+void SM_FN(sm_imp_residual)(const sm_implicit_sys *s, const sm_real *z, sm_real *y);
+/* The contact projection P (sticky rows to zero, normals removed); prune: PRUNE_COLLISIONS. */
+void SM_FN(sm_imp_project)(const sm_implicit_sys *s, sm_real *y, int prune);
+/* vstar = v^n + FORCE_INCREMENT_VEL(z) = v^n + dt g - (dt/m) sum_p G_p(z) grad w. */
+void SM_FN(sm_imp_force_increment)(const sm_implicit_sys *s, const sm_real *z, sm_real *vstar);
+/* NONLINEAR_FUNCTION at z (collided): y = the pruned residual; returns sum m |y|^2. */
+double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, const sm_real *z, sm_real *y);
+/* TIMES_DIFF (Algorithm 6) at the last precompute: out = J x. px: scratch for P x; overwrites
+ * ws->G with the Hessian products. */
+void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_real *out, sm_real *px);
+/* GRID_COLLISIONS of z in place, recording ws->contact. */
+void SM_FN(sm_imp_collide)(const sm_implicit_sys *s, sm_real *z);
+#endif
+
+#endif

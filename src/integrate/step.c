@@ -1,0 +1,309 @@
+/* The step driver: one MPM step as thesis Algorithm 1 (DESIGN §3), and the choice of dt.
+ *
+ *   dt      min(max_dt, cfl dx / max particle speed, elastic_cfl dx / wave speed), landing
+ *           exactly on the target time (sm_world_next_dt, sm_world_advance);
+ *   2       bin particles by grid block (grid/bin_dim.c);
+ *   3       P2G: mass, momentum, internal force (transfer/p2g_dim.c);
+ *   4-5     grid update v* = v^n + dt (f/m + g) (integrate/explicit_dim.c) or the implicit solve
+ *           (integrate/implicit_dim.c); collisions -> v-bar, friction -> v-tilde
+ *           (collide/grid_collide_dim.c);
+ *   6       G2P: v, B from v-tilde; x, F^E-hat from v-bar (transfer/g2p_dim.c);
+ *   7       plasticity and hardening, then tau for the next P2G (material/plasticity_dim.c);
+ *   8       emitters add particles (particles/emit.c).
+ * The health checks (health.c) run before the step, after the grid update and at its end. Each
+ * stage gets its own argument struct, made here from the world (*_io below): exactly the arrays
+ * it reads and writes, named for what they hold (grid.h's lifetime table). Every stage is timed
+ * into stage_seconds (Box2D's b2Profile). */
+#include <string.h>
+
+#include "core/timer.h"
+#include "integrate/health.h"
+#include "world/world.h"
+
+static sm_step_ctx step_ctx(const sm_world *w, double dt) {
+    sm_step_ctx c;
+    memset(&c, 0, sizeof c);
+    c.dt = dt;
+    c.dx = (sm_real)w->def.dx;
+    c.inv_dx = (sm_real)w->inv_dx;
+    for (int a = 0; a < 3; a++) {
+        c.lo[a] = (sm_real)w->def.domain_min[a];
+        c.gravity[a] = (sm_real)w->def.gravity[a];
+        c.cells[a] = w->cells[a];
+    }
+    c.stencil = w->def.kernel == SM_KERNEL_CUBIC ? 4 : 3;
+    c.transfer = (int)w->def.transfer;
+    c.flip_ratio = (sm_real)w->def.flip_ratio;
+    c.threads = w->threads;
+    return c;
+}
+
+/* Adds the seconds since *t to stage s and restarts the clock. */
+static void lap(sm_world *w, sm_stage s, double *t) {
+    const double now = sm_seconds();
+    w->stage_seconds[s] += now - *t;
+    *t = now;
+}
+
+/* ---- The stages' arguments, from the world ---------------------------------------------- */
+
+static sm_grid_colliders grid_colliders(const sm_world *w) {
+    sm_grid_colliders gc = {w->colliders, w->ncolliders + w->nwalls, w->def.static_friction_sticks};
+    return gc;
+}
+
+static sm_p2g_io p2g_io(sm_world *w, int with_force) {
+    const sm_particles *P = &w->p;
+    sm_p2g_io io = {P->n, P->x, P->v, P->B, P->tau, P->vol0, P->mat, w->mats, &w->bins, w->cache.data, with_force,
+                    sm_grid_p2g_arrays(&w->grid)};
+    return io;
+}
+
+static sm_grid_update_io grid_update_io(sm_world *w) {
+    sm_grid_update_io io = {&w->grid, sm_grid_p2g_arrays(&w->grid), sm_grid_vel_arrays(&w->grid), grid_colliders(w)};
+    return io;
+}
+
+static sm_implicit_io implicit_io(sm_world *w) {
+    const sm_particles *P = &w->p;
+    sm_implicit_io io;
+    memset(&io, 0, sizeof io);
+    io.sys.n = P->n;
+    io.sys.x = P->x;
+    io.sys.F = P->F;
+    io.sys.vol0 = P->vol0;
+    io.sys.alpha = P->alpha;
+    io.sys.mat = P->mat;
+    io.sys.mats = w->mats;
+    io.sys.bins = &w->bins;
+    io.sys.grid = &w->grid;
+    io.sys.colliders = grid_colliders(w);
+    io.sys.ws = &w->imp;
+    io.in = sm_grid_p2g_arrays(&w->grid);
+    io.out = sm_grid_vel_arrays(&w->grid);
+    io.newton_tolerance = w->def.newton_tolerance;
+    io.newton_max_iterations = w->def.newton_max_iterations;
+    io.gmres_max_iterations = w->def.gmres_max_iterations;
+    io.gmres_tolerance = w->def.gmres_tolerance;
+    io.stats = &w->newton;
+    return io;
+}
+
+static sm_g2p_io g2p_io(sm_world *w) {
+    sm_particles *P = &w->p;
+    const sm_grid_vel vel = sm_grid_vel_arrays(&w->grid);
+    sm_g2p_io io = {P->n, P->x, P->v, P->B, P->F, &w->bins, w->cache.data, vel.vn, vel.vbar, vel.vtilde,
+                    w->colliders, w->ncolliders, w->def.particle_projection};
+    return io;
+}
+
+static sm_plasticity_io plasticity_io(sm_world *w, size_t first) {
+    sm_particles *P = &w->p;
+    sm_plasticity_io io = {first, P->n, P->F, P->alpha, P->q, P->tau, P->mat, w->mats, w->threads};
+    return io;
+}
+
+/* ---- The stages ------------------------------------------------------------------------- */
+
+/* 2. Bin particles by grid block; the transfer caches for the threads. */
+static sm_status bin_particles(sm_world *w, const sm_step_ctx *c) {
+    if (w->stages->bin(&w->bins, &w->p, &w->grid, c) != SM_OK ||
+        sm_transfer_cache_reserve(&w->cache, w->dim, c->threads > 0 ? c->threads : 1) != SM_OK)
+        return sm_world_fail(w, SM_ERR_NOMEM, "step %llu: out of memory for the grid and the particle sort",
+                             (unsigned long long)w->steps + 1);
+    return SM_OK;
+}
+
+/* 3. P2G; the implicit integrator computes forces in its solve. */
+static void p2g(sm_world *w, const sm_step_ctx *c) {
+    const sm_p2g_io io = p2g_io(w, w->def.integrator != SM_INTEGRATOR_IMPLICIT);
+    w->stages->p2g(&io, c);
+}
+
+/* 4-5. Grid velocities v-bar, v-tilde (and v^n for FLIP): explicit update or implicit solve. */
+static sm_status grid_velocities(sm_world *w, const sm_step_ctx *c) {
+    if (w->def.integrator != SM_INTEGRATOR_IMPLICIT) {
+        const sm_grid_update_io io = grid_update_io(w);
+        w->stages->grid_update(&io, c);
+        return SM_OK;
+    }
+    const sm_implicit_io io = implicit_io(w);
+    const sm_status st = w->stages->implicit_solve(&io, c);
+    if (st == SM_ERR_NOMEM)
+        return sm_world_fail(w, SM_ERR_NOMEM, "implicit integrator: out of memory for %zu grid nodes",
+                             w->grid.nactive * (size_t)w->grid.block_nodes);
+    if (st != SM_OK)
+        return sm_world_fail(w, st, "step %llu (t = %.6g s, dt = %.3g s): the implicit solve diverged (residual %g)",
+                             (unsigned long long)w->steps + 1, w->time, c->dt, w->newton.last_norm);
+    return SM_OK;
+}
+
+/* 6. G2P, with its counters and the health flags. */
+static void g2p(sm_world *w, const sm_step_ctx *c) {
+    const sm_g2p_io io = g2p_io(w);
+    sm_g2p_stats st;
+    w->stages->g2p(&io, c, &st);
+    w->clamped += st.clamped;
+    w->projected += st.projected;
+    w->step_vmax2 = st.vmax2;
+    w->step_bad = st.bad;
+}
+
+/* 7. Plasticity of particles [first, n). */
+static void plasticity(sm_world *w, size_t first) {
+    const sm_plasticity_io io = plasticity_io(w, first);
+    if (w->stages->plasticity(&io)) w->step_bad = 1;
+}
+
+void sm_world_init_stress(sm_world *w, size_t first) { plasticity(w, first); }
+
+/* ---- The step --------------------------------------------------------------------------- */
+
+/* Runs a stage that can fail, times it into stage_seconds[stage]; a failure stops the world
+ * (the stage has written the message). */
+#define STAGE(w, t, stage, call)          \
+    do {                                  \
+        const sm_status st_ = (call);     \
+        lap((w), (stage), (t));           \
+        if (st_ != SM_OK) {               \
+            (w)->failed = 1;              \
+            return st_;                   \
+        }                                 \
+    } while (0)
+
+/* The particle stages of Algorithm 1 (what a step does when there are particles). */
+static sm_status step_particles(sm_world *w, const sm_step_ctx *c) {
+    double t = sm_seconds();
+    STAGE(w, &t, SM_STAGE_CHECKS, sm_health_check_start(w, c->dt));
+    STAGE(w, &t, SM_STAGE_SORT, bin_particles(w, c));     /* 2 */
+    p2g(w, c);                                            /* 3 */
+    lap(w, SM_STAGE_P2G, &t);
+    STAGE(w, &t, SM_STAGE_GRID, grid_velocities(w, c));  /* 4-5 */
+    STAGE(w, &t, SM_STAGE_CHECKS, sm_health_check_grid(w, c->dt));
+    g2p(w, c);                                            /* 6 */
+    lap(w, SM_STAGE_G2P, &t);
+    plasticity(w, 0);                                     /* 7 */
+    lap(w, SM_STAGE_PLASTICITY, &t);
+    STAGE(w, &t, SM_STAGE_CHECKS, sm_health_check_end(w, c->dt));
+    return SM_OK;
+}
+
+static void colliders_begin_step(sm_world *w, double dt) {
+    for (int i = 0; i < w->ncolliders; i++) sm_collider_begin_step(&w->colliders[i], w->time, dt);
+}
+
+static void colliders_end_step(sm_world *w) {
+    for (int i = 0; i < w->ncolliders; i++) sm_collider_end_step(&w->colliders[i]);
+}
+
+static void advance_clock(sm_world *w, double dt) {
+    w->time += dt;
+    w->steps++;
+    w->last_dt = dt;
+    if (dt < w->min_dt) w->min_dt = dt;
+    if (dt > w->max_dt) w->max_dt = dt;
+}
+
+sm_status sm_world_step(sm_world *w, double dt) {
+    if (w->failed)
+        return sm_world_fail(w, SM_ERR_NUMERICAL, "the world stopped after a numerical failure at step %llu; create a new one",
+                             (unsigned long long)w->steps);
+    if (!(dt > 0) || !isfinite(dt)) return sm_world_fail(w, SM_ERR_INVALID, "step: dt must be > 0, got %g", dt);
+    const sm_step_ctx c = step_ctx(w, dt);
+    colliders_begin_step(w, dt);                      /* poses at t^n and t^n+1 */
+    if (w->p.n > 0) {
+        const sm_status st = step_particles(w, &c);   /* 2-7 */
+        if (st != SM_OK) return st;
+    }
+    colliders_end_step(w);
+    if (w->nemitters > 0) {                           /* 8 */
+        const sm_status st = sm_world_run_emitters(w, w->time, w->time + dt);
+        if (st != SM_OK) return st;
+    }
+    advance_clock(w, dt);
+    return SM_OK;
+}
+
+/* ---- Time step choice ------------------------------------------------------------------- */
+
+double sm_world_time(const sm_world *w) { return w->time; }
+
+static double max_particle_speed(const sm_world *w) {
+    if (!w->dirty) return sqrt(w->step_vmax2); /* measured by the last G2P */
+    const int d = w->dim;
+    const long n = (long)w->p.n;
+    const sm_real *v = w->p.v;
+    double m2 = 0;
+#pragma omp parallel for schedule(static) reduction(max : m2) num_threads(w->threads)
+    for (long p = 0; p < n; p++) {
+        double s = 0;
+        for (int a = 0; a < d; a++) s += (double)v[p * d + a] * (double)v[p * d + a];
+        if (s > m2) m2 = s;
+    }
+    return sqrt(m2);
+}
+
+double sm_world_next_dt(sm_world *w, double t_end) {
+    double t0 = sm_seconds();
+    double dt = w->def.max_dt;
+    double vmax = max_particle_speed(w);
+    if (vmax > 0) dt = fmin(dt, w->def.cfl * w->def.dx / vmax);
+    if (w->def.elastic_cfl > 0 && w->def.integrator == SM_INTEGRATOR_EXPLICIT) {
+        double c = 0;
+        for (int i = 0; i < w->nmats; i++) c = fmax(c, w->mats[i].wave_speed);
+        if (c > 0) dt = fmin(dt, w->def.elastic_cfl * w->def.dx / c);
+    }
+    double remaining = t_end - w->time;
+    if (remaining > 0) {
+        if (dt >= remaining * (1 - 1e-12)) dt = remaining;
+        else if (dt > 0.5 * remaining) dt = 0.5 * remaining; /* no sliver step at the frame end */
+    }
+    w->stage_seconds[SM_STAGE_DT] += sm_seconds() - t0;
+    return dt;
+}
+
+sm_status sm_world_advance(sm_world *w, double t_end) {
+    if (!isfinite(t_end)) return sm_world_fail(w, SM_ERR_INVALID, "advance: end time must be finite");
+    while (w->time < t_end) {
+        const double dt = sm_world_next_dt(w, t_end);
+        const int last = (dt == t_end - w->time);
+        const sm_status st = sm_world_step(w, dt);
+        if (st != SM_OK) return st;
+        if (last) w->time = t_end; /* exactly, without rounding drift */
+    }
+    return SM_OK;
+}
+
+/* ---- Test hooks: single stages ---------------------------------------------------------- */
+
+double sm_world_debug_implicit_jvp(sm_world *w, double dt, uint64_t seed, double vscale, double h) {
+    const sm_step_ctx c = step_ctx(w, dt);
+    if (bin_particles(w, &c) != SM_OK) return INFINITY;
+    const sm_p2g_io pio = p2g_io(w, 0);
+    w->stages->p2g(&pio, &c);
+    const sm_implicit_io io = implicit_io(w);
+    return w->stages->implicit_jvp_check(&io, &c, seed, vscale, h);
+}
+
+void sm_world_debug_transfer_roundtrip(sm_world *w, sm_transfer_totals *t) {
+    sm_step_ctx c = step_ctx(w, 0.0);
+    for (int a = 0; a < 3; a++) c.gravity[a] = 0;
+    sm_world_particle_totals(w, &t->mass[0], t->mom[0], t->ang[0]);
+    if (bin_particles(w, &c) != SM_OK) return;
+    const sm_p2g_io pio = p2g_io(w, 0);
+    w->stages->p2g(&pio, &c);
+    /* v^n = mv/m, and v-bar = v-tilde = v^n: no force, no gravity, no collision. */
+    const sm_grid *g = &w->grid;
+    const sm_grid_p2g in = sm_grid_p2g_arrays(g);
+    const sm_grid_vel out = sm_grid_vel_arrays(g);
+    const size_t d = (size_t)w->dim, nn = g->nactive * (size_t)g->block_nodes;
+    for (size_t ni = 0; ni < nn; ni++)
+        for (size_t a = 0; a < d; a++) {
+            const sm_real v = in.mass[ni] > 0 ? in.momentum[ni * d + a] / in.mass[ni] : 0;
+            if (out.vn) out.vn[ni * d + a] = v;
+            out.vbar[ni * d + a] = out.vtilde[ni * d + a] = v;
+        }
+    sm_world_grid_totals(w, &t->mass[1], t->mom[1], t->ang[1]);
+    g2p(w, &c);
+    sm_world_particle_totals(w, &t->mass[2], t->mom[2], t->ang[2]);
+}

@@ -1,0 +1,243 @@
+/* G2P (transfer.h), compiled for SM_DIM = 2 and 3.
+ *
+ * Thesis §3.6.1, §3.6.5:
+ *   v_p = sum_i w_ip v-tilde_i                                (3.109)  (PIC, APIC)
+ *   v_p = r v_p + sum_i w_ip (v-tilde_i - r v^n_i)             (3.111)  (FLIP, ratio r)
+ *   B_p = sum_i w_ip v-tilde_i (x_i - x_p)^T                   (3.112), (3.113)  (APIC)
+ *   F^E-hat_p = (I + dt sum_i v-bar_i grad w_ip^T) F^E_p       (3.114)
+ *   x_p = x_p + dt sum_i w_ip v-bar_i                          (3.116)
+ * Positions and F^E follow the pre-friction v-bar, velocities the final v-tilde (§3.6.5).
+ * A position is clamped 2 cells inside the domain (every stencil stays on the grid) and, as a
+ * safety net, put back on the surface of a user collider it ended inside.
+ *
+ * Per particle block: gather the 2^d grid blocks into the thread's cache (lanes 0..d-1:
+ * v-tilde, or v-tilde - r v^n for FLIP; lanes d..2d-1: v-bar), then interpolate each particle
+ * from it with the separable weights. Threads take contiguous block ranges of equal particle
+ * counts (the same particles as in P2G). */
+#include "core/dim.h"
+
+#include <string.h>
+
+#include "core/threads.h"
+#include "transfer/stencil_dim.h"
+
+/* Gathers the 2^d grid blocks of particle block pb into the cache (see the top of the file). */
+static void g2p_gather(const sm_g2p_io *io, const sm_step_ctx *c, const sm_pblock *pb, vec *restrict cache) {
+    const int flip = (c->transfer == SM_TRANSFER_FLIP);
+    const sm_real r = c->flip_ratio;
+    for (int cb = 0; cb < NGB; cb++) {
+        const uint32_t slot = pb->gslot[cb];
+        for (int l = 0; l < BN; l++) {
+            vec *q = &cache[cache_index(cb, l)];
+            vec val = {0};
+            if (slot != SM_NO_SLOT) {
+                const size_t ni = (size_t)slot * BN + (size_t)l;
+                for (int a = 0; a < D; a++) {
+                    val[a] = flip ? io->vtilde[ni * D + a] - r * io->vn[ni * D + a] : io->vtilde[ni * D + a];
+                    val[D + a] = io->vbar[ni * D + a];
+                }
+            }
+            *q = val;
+        }
+    }
+}
+
+/* Per-block G2P results: positions' bounding box, largest speed, non-finite flag, clamps. */
+typedef struct g2p_acc {
+    sm_real lo[D], hi[D];
+    sm_real vmax2;
+    sm_real nan;        /* 0 * every new value, summed: NaN iff one of them is not finite */
+    size_t clamped;
+} g2p_acc;
+
+/* The interpolated sums of one particle from the cache: Sum = sum w N (lanes 0..d-1: v-tilde
+ * part, d..2d-1: v-bar) and E[e] = sum K_e N, where K_e = (w dp_e, ..., dw_e, ...): lanes 0..d-1
+ * give B's column e, lanes d..2d-1 the velocity gradient's column e. */
+static inline __attribute__((always_inline)) void g2p_sums(int S, const weights *restrict Wp,
+                                                          const vec *restrict cache, vec *Sum_out, vec E[D]) {
+    const weights W = *Wp;
+    vec K[D][4];
+    for (int e = 0; e < D; e++)
+        for (int s = 0; s < S; s++) {
+            vec k = {0};
+            for (int a = 0; a < D; a++) {
+                k[a] = W.w[e][s] * W.dp[e][s];
+                k[D + a] = W.dw[e][s];
+            }
+            K[e][s] = k;
+        }
+    vec Sum = {0};
+    for (int e = 0; e < D; e++) E[e] = (vec){0};
+#if D == 2
+    for (int s0 = 0; s0 < S; s0++) {
+        const vec *row = cache + (W.lb[0] + s0) * SM_CACHE_SIDE + W.lb[1];
+        vec t = {0}, ty = {0};
+        for (int s1 = 0; s1 < S; s1++) {
+            const vec N = row[s1];
+            t += W.w[1][s1] * N;
+            ty += K[1][s1] * N;
+        }
+        Sum += W.w[0][s0] * t;
+        E[0] += K[0][s0] * t;
+        E[1] += W.w[0][s0] * ty;
+    }
+#else
+    vec KY[4][4], KZ[4][4];
+    sm_real W12[4][4];
+    for (int s1 = 0; s1 < S; s1++)
+        for (int s2 = 0; s2 < S; s2++) {
+            W12[s1][s2] = W.w[1][s1] * W.w[2][s2];
+            KY[s1][s2] = W.w[2][s2] * K[1][s1];
+            KZ[s1][s2] = W.w[1][s1] * K[2][s2];
+        }
+    for (int s0 = 0; s0 < S; s0++) {
+        vec t = {0}, ty = {0}, tz = {0};
+        for (int s1 = 0; s1 < S; s1++) {
+            const vec *row = cache + ((W.lb[0] + s0) * SM_CACHE_SIDE + W.lb[1] + s1) * SM_CACHE_SIDE + W.lb[2];
+            for (int s2 = 0; s2 < S; s2++) {
+                const vec N = row[s2];
+                t += W12[s1][s2] * N;
+                ty += KY[s1][s2] * N;
+                tz += KZ[s1][s2] * N;
+            }
+        }
+        Sum += W.w[0][s0] * t;
+        E[0] += K[0][s0] * t;
+        E[1] += W.w[0][s0] * ty;
+        E[2] += W.w[0][s0] * tz;
+    }
+#endif
+    *Sum_out = Sum;
+}
+
+/* Particle p's new v, B, F^E-hat and x from its sums. */
+static inline __attribute__((always_inline)) void g2p_update(const sm_g2p_io *io, const sm_step_ctx *c, size_t p,
+                                                            vec Sum, const vec E[D], g2p_acc *acc) {
+    const int transfer = c->transfer;
+    const sm_real dt = (sm_real)c->dt;
+    sm_real s2 = 0, z = 0;
+    for (int a = 0; a < D; a++) {
+        sm_real va = transfer == SM_TRANSFER_FLIP ? c->flip_ratio * io->v[p * D + a] + Sum[a] : Sum[a];
+        io->v[p * D + a] = va;
+        s2 += va * va;
+        z += 0 * va;
+    }
+    acc->vmax2 = s2 > acc->vmax2 ? s2 : acc->vmax2;
+    if (transfer == SM_TRANSFER_APIC)
+        for (int a = 0; a < D; a++)
+            for (int e = 0; e < D; e++) io->B[p * DD + a * D + e] = E[e][a];
+    /* F^E-hat = (I + dt T) F^E (3.114), T = sum v-bar grad w^T. */
+    sm_real Fo[DD], *F = io->F + p * DD;
+    memcpy(Fo, F, sizeof Fo);
+    for (int a = 0; a < D; a++)
+        for (int e = 0; e < D; e++) {
+            sm_real s = Fo[a * D + e];
+            for (int k = 0; k < D; k++) s += dt * E[k][D + a] * Fo[k * D + e];
+            F[a * D + e] = s;
+            z += 0 * s;
+        }
+    /* x = x + dt sum w v-bar (3.116); the safety clamp keeps every stencil inside the grid. */
+    for (int a = 0; a < D; a++) {
+        sm_real xa = io->x[p * D + a] + dt * Sum[D + a];
+        sm_real lo = c->lo[a] + SM_R(2.0) * c->dx;
+        sm_real hi = c->lo[a] + (sm_real)(c->cells[a] - 2) * c->dx;
+        if (xa < lo) {
+            xa = lo;
+            acc->clamped++;
+        } else if (xa > hi) {
+            xa = hi;
+            acc->clamped++;
+        }
+        z += 0 * xa;
+        io->x[p * D + a] = xa;
+        acc->lo[a] = xa < acc->lo[a] ? xa : acc->lo[a];
+        acc->hi[a] = xa > acc->hi[a] ? xa : acc->hi[a];
+    }
+    acc->nan += z;
+}
+
+/* Safety net: a particle that ends a step inside a collider is put back on its surface along
+ * the gradient (positions only). The grid-level constraints keep this rare and small; it is
+ * counted in sm_diagnostics.projected_particles. Only colliders that may reach the block's
+ * bounding box (1-Lipschitz signed distance at its centre) are evaluated per particle. */
+static size_t project_block(const sm_g2p_io *io, const sm_pblock *pb, const g2p_acc *acc) {
+    double ctr[3] = {0, 0, 0}, R2 = 0;
+    for (int a = 0; a < D; a++) {
+        ctr[a] = 0.5 * ((double)acc->lo[a] + (double)acc->hi[a]);
+        double h = 0.5 * ((double)acc->hi[a] - (double)acc->lo[a]);
+        R2 += h * h;
+    }
+    const double R = sqrt(R2) + 1e-6 * (1.0 + fabs(ctr[0]) + fabs(ctr[1]) + fabs(ctr[2]));
+    size_t projected = 0;
+    for (int b = 0; b < io->ncolliders; b++) {
+        if (sm_collider_phi(&io->colliders[b], D, 1, ctr, NULL) > R) continue;
+        for (uint32_t idx = pb->start; idx < pb->end; idx++) {
+            const size_t p = io->bins->perm[idx];
+            double xp[3] = {0, 0, 0}, gr[3];
+            for (int a = 0; a < D; a++) xp[a] = (double)io->x[p * D + a];
+            double phi = sm_collider_phi(&io->colliders[b], D, 1, xp, gr);
+            if (phi < 0) {
+                for (int a = 0; a < D; a++) io->x[p * D + a] = (sm_real)(xp[a] - phi * gr[a]);
+                projected++;
+            }
+        }
+    }
+    return projected;
+}
+
+/* The particles of block pb, S nodes per axis. */
+static inline __attribute__((always_inline)) void g2p_block(const sm_g2p_io *io, const sm_step_ctx *c, int S,
+                                                           const sm_pblock *pb, const vec *restrict cache,
+                                                           g2p_acc *acc) {
+    const uint32_t *perm = io->bins->perm;
+    int bc[3];
+    pblock_origin(pb, bc);
+    wchunk wc;
+    for (uint32_t idx = pb->start; idx < pb->end; idx++) {
+        const int j = (int)((idx - pb->start) % WCH);
+        if (j == 0) chunk_weights(S, io->x, io->n, 0, perm, idx, (int)(pb->end - idx), c, bc, &wc);
+        weights W;
+        chunk_get(&wc, j, &W);
+        vec Sum, E[D];
+        g2p_sums(S, &W, cache, &Sum, E);
+        g2p_update(io, c, perm[idx], Sum, E, acc);
+    }
+}
+
+void SM_FN(sm_g2p)(const sm_g2p_io *io, const sm_step_ctx *c, sm_g2p_stats *st) {
+    const int S = c->stencil;
+    const sm_bins *bins = io->bins;
+    const long nb = (long)bins->npb;
+    vec *caches = (vec *)io->cache;
+    unsigned long long clamped = 0, projected = 0, bad = 0;
+    double vmax2 = 0;
+#pragma omp parallel num_threads(c->threads) reduction(+ : clamped, projected, bad) reduction(max : vmax2)
+    {
+        int t, T;
+        sm_thread_team(&t, &T);
+        vec *cache = caches + (size_t)t * NCACHE;
+        long blo, bhi;
+        sm_bins_range(bins, NULL, 0, nb, T, t, &blo, &bhi);
+        for (long b = blo; b < bhi; b++) {
+            const sm_pblock *pb = &bins->pb[b];
+            g2p_gather(io, c, pb, cache);
+            g2p_acc acc;
+            for (int a = 0; a < D; a++) {
+                acc.lo[a] = (sm_real)INFINITY;
+                acc.hi[a] = -(sm_real)INFINITY;
+            }
+            acc.vmax2 = acc.nan = 0;
+            acc.clamped = 0;
+            if (S == 3) g2p_block(io, c, 3, pb, cache, &acc);
+            else g2p_block(io, c, 4, pb, cache, &acc);
+            clamped += acc.clamped;
+            if (acc.nan != 0 || acc.nan != acc.nan) bad++;
+            else if (io->particle_projection && io->ncolliders > 0) projected += project_block(io, pb, &acc);
+            if ((double)acc.vmax2 > vmax2) vmax2 = (double)acc.vmax2;
+        }
+    }
+    st->clamped = clamped;
+    st->projected = projected;
+    st->vmax2 = vmax2;
+    st->bad = bad > 0;
+}

@@ -1,0 +1,158 @@
+/* Stencil helpers shared by P2G, G2P and the implicit operators (included by *_dim.c files
+ * only: D is a constant). The weights are the dyadic products of the 1D B-splines of kernel.h,
+ * (3.18)-(3.21); a particle of particle block b (grid/bin.h) touches the nodes 4 b + lb + s,
+ * s = 0 .. S-1 per axis, which lie in the 2^d grid blocks b + {0,1}^d.
+ *
+ * The hot loops use GCC/Clang vector extensions: one SM_LANES-wide vector `vec` per cached node. */
+#ifndef SM_TRANSFER_STENCIL_DIM_H
+#define SM_TRANSFER_STENCIL_DIM_H
+
+#include "core/dim.h"
+#include "transfer/kernel.h"
+#include "transfer/transfer.h"
+
+#if D == 2
+#define NCACHE (SM_CACHE_SIDE * SM_CACHE_SIDE)
+#else
+#define NCACHE (SM_CACHE_SIDE * SM_CACHE_SIDE * SM_CACHE_SIDE)
+#endif
+
+typedef sm_real vec __attribute__((vector_size(SM_LANES * sizeof(sm_real))));
+
+/* Weights of one particle: per axis, S nodes starting at lb (relative to the particle block's
+ * first node, 0..3). */
+typedef struct weights {
+    int lb[D];
+    sm_real w[D][4];
+    sm_real dw[D][4]; /* derivative w.r.t. position (already times 1/dx) */
+    sm_real dp[D][4]; /* x_i - x_p per axis, m */
+} weights;
+
+static inline __attribute__((always_inline)) void kernel_weights(int S, const sm_real *xp, const sm_step_ctx *c,
+                                                                 const int bc[3], weights *W) {
+    for (int a = 0; a < D; a++) {
+        sm_real X = (xp[a] - c->lo[a]) * c->inv_dx;
+        int b = sm_kernel_1d(S, X, W->w[a], W->dw[a]);
+        W->lb[a] = b - (bc[a] << SM_BLOCK_BITS);
+        for (int k = 0; k < 4; k++) {
+            W->dw[a][k] *= c->inv_dx;
+            W->dp[a][k] = ((sm_real)(b + k) - X) * c->dx;
+        }
+    }
+}
+
+/* Weights of up to WCH consecutive particles of a block (idx i0 .. i0+cnt-1 of perm), computed
+ * together in loops over the particles that the compiler vectorises (structure of arrays). The
+ * same operations as kernel_weights, except that the stencil base is found by truncation: every
+ * particle lies at least 2 cells inside the domain (sm_world_add_particles checks it, G2P clamps),
+ * so X >= 2 and truncation equals floor. Lanes past cnt repeat particle i0 (ignored). */
+#define WCH 16
+typedef struct wchunk {
+    int lb[D][WCH];
+    sm_real w[D][4][WCH], dw[D][4][WCH], dp[D][4][WCH];
+} wchunk;
+
+static inline __attribute__((always_inline)) void chunk_weights(int S, const sm_real *restrict x, size_t n, int overread,
+                                                                const uint32_t *restrict perm, uint32_t i0, int cnt,
+                                                                const sm_step_ctx *c, const int bc[3],
+                                                                wchunk *restrict wc) {
+    /* Positions: read in place when the chunk's particles are consecutive in storage (the usual
+     * case: a block's indices increase, so equal span and count mean consecutive) and WCH of them
+     * exist from the first; else copied (lanes past cnt: the first particle). No gathers: they are
+     * slow here. A partial chunk reads past its particles only with `overread` (P2G: nobody writes
+     * positions then; G2P moves other blocks' particles concurrently). */
+    const sm_real *xb;
+    sm_real xl[WCH * D];
+    const uint32_t q0 = perm[i0];
+    if (perm[i0 + (uint32_t)cnt - 1] - q0 == (uint32_t)(cnt - 1) && (size_t)q0 + WCH <= n && (overread || cnt == WCH)) {
+        xb = x + (size_t)q0 * D;
+    } else {
+        for (int j = 0; j < WCH; j++) {
+            const uint32_t q = perm[i0 + (uint32_t)(j < cnt ? j : 0)];
+            for (int a = 0; a < D; a++) xl[j * D + a] = x[(size_t)q * D + a];
+        }
+        xb = xl;
+    }
+    for (int a = 0; a < D; a++) {
+        const sm_real lo = c->lo[a], inv = c->inv_dx, dx = c->dx;
+        const int org = bc[a] << SM_BLOCK_BITS;
+        for (int j = 0; j < WCH; j++) {
+            const sm_real X = (xb[j * D + a] - lo) * inv;
+            sm_real w4[4], d4[4];
+            const int b = S == 3 ? (int)(X - SM_R(0.5)) : (int)X - 1; /* X >= 2: truncation = floor */
+            sm_kernel_1d_at(S, X - (sm_real)b, w4, d4);
+            wc->lb[a][j] = b - org;
+            for (int k = 0; k < 4; k++) {
+                wc->w[a][k][j] = w4[k];
+                wc->dw[a][k][j] = d4[k] * inv;
+                wc->dp[a][k][j] = ((sm_real)(b + k) - X) * dx;
+            }
+        }
+    }
+}
+
+static inline __attribute__((always_inline)) void chunk_get(const wchunk *wc, int j, weights *W) {
+    for (int a = 0; a < D; a++) {
+        W->lb[a] = wc->lb[a][j];
+        for (int k = 0; k < 4; k++) {
+            W->w[a][k] = wc->w[a][k][j];
+            W->dw[a][k] = wc->dw[a][k][j];
+            W->dp[a][k] = wc->dp[a][k][j];
+        }
+    }
+}
+
+/* Grid node index of stencil node s (per axis) of a particle of block pb. */
+static inline size_t stencil_node(const sm_pblock *pb, const weights *W, const int *s) {
+    unsigned cb = 0, local = 0;
+    for (int a = 0; a < D; a++) {
+        int node = W->lb[a] + s[a];
+        cb = (cb << 1) | (unsigned)(node >> SM_BLOCK_BITS);
+        local = (local << SM_BLOCK_BITS) | (unsigned)(node & SM_BLOCK_MASK);
+    }
+    return (size_t)pb->gslot[cb] * BN + local;
+}
+
+/* Generic stencil loop (implicit integrator): node index `ni`, weight `wgt`, gradient `gw[D]`. */
+#if D == 2
+#define STENCIL_BEGIN(S, W, pb)                                                                \
+    for (int s0 = 0; s0 < (S); s0++)                                                           \
+        for (int s1 = 0; s1 < (S); s1++) {                                                     \
+            const int ss_[2] = {s0, s1};                                                       \
+            size_t ni = stencil_node((pb), &(W), ss_);                                         \
+            sm_real wgt = (W).w[0][s0] * (W).w[1][s1];                                         \
+            sm_real gw[2] = {(W).dw[0][s0] * (W).w[1][s1], (W).w[0][s0] * (W).dw[1][s1]};
+#define STENCIL_END }
+#else
+#define STENCIL_BEGIN(S, W, pb)                                                                \
+    for (int s0 = 0; s0 < (S); s0++)                                                           \
+        for (int s1 = 0; s1 < (S); s1++)                                                       \
+            for (int s2 = 0; s2 < (S); s2++) {                                                 \
+                const int ss_[3] = {s0, s1, s2};                                               \
+                size_t ni = stencil_node((pb), &(W), ss_);                                     \
+                sm_real wyz = (W).w[1][s1] * (W).w[2][s2];                                     \
+                sm_real wgt = (W).w[0][s0] * wyz;                                              \
+                sm_real gw[3] = {(W).dw[0][s0] * wyz, (W).w[0][s0] * (W).dw[1][s1] * (W).w[2][s2], \
+                                 (W).w[0][s0] * (W).w[1][s1] * (W).dw[2][s2]};
+#define STENCIL_END }
+#endif
+
+/* Cache entry of node l (block-local index, grid.h) of the particle block's grid block cb. */
+static inline int cache_index(int cb, int l) {
+    const int ci = (cb >> (D - 1)) & 1, cj = (cb >> (D - 2)) & 1;
+#if D == 2
+    return (4 * ci + (l >> 2)) * SM_CACHE_SIDE + 4 * cj + (l & 3);
+#else
+    const int ck = cb & 1;
+    return ((4 * ci + (l >> 4)) * SM_CACHE_SIDE + 4 * cj + ((l >> 2) & 3)) * SM_CACHE_SIDE + 4 * ck + (l & 3);
+#endif
+}
+
+/* First node (per axis) of a particle block. */
+static inline void pblock_origin(const sm_pblock *pb, int bc[3]) {
+    sm_block_coords(pb->key, bc);
+    for (int a = 0; a < 3; a++) bc[a] = a < D ? bc[a] : 0;
+}
+
+
+#endif

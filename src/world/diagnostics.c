@@ -1,0 +1,116 @@
+/* Diagnostics of the world: particle and grid totals (mass, momentum, angular momentum), energies,
+ * the step statistics, the state hash. */
+#include <string.h>
+
+#include "material/material.h"
+#include "math/svd.h"
+#include "world/world.h"
+
+void sm_world_particle_totals(const sm_world *w, double *mass, double mom[3], double ang[3]) {
+    const int d = w->dim, dd = d * d;
+    const sm_particles *P = &w->p;
+    *mass = 0;
+    for (int a = 0; a < 3; a++) mom[a] = ang[a] = 0;
+    const int apic = (w->def.transfer == SM_TRANSFER_APIC);
+    for (size_t p = 0; p < P->n; p++) {
+        double m = (double)sm_particle_mass(w->mats, P, p);
+        double x[3] = {0, 0, 0}, v[3] = {0, 0, 0}, B[9] = {0};
+        for (int a = 0; a < d; a++) {
+            x[a] = (double)P->x[p * d + a];
+            v[a] = (double)P->v[p * d + a];
+        }
+        if (apic)
+            for (int a = 0; a < d; a++)
+                for (int e = 0; e < d; e++) B[a * 3 + e] = (double)P->B[p * dd + a * d + e];
+        *mass += m;
+        for (int a = 0; a < 3; a++) mom[a] += m * v[a];
+        /* L_p = m (x x v) + m eps_abc B_cb (APIC's affine part, derived from P2G of (3.87)). */
+        ang[0] += m * (x[1] * v[2] - x[2] * v[1] + B[2 * 3 + 1] - B[1 * 3 + 2]);
+        ang[1] += m * (x[2] * v[0] - x[0] * v[2] + B[0 * 3 + 2] - B[2 * 3 + 0]);
+        ang[2] += m * (x[0] * v[1] - x[1] * v[0] + B[1 * 3 + 0] - B[0 * 3 + 1]);
+    }
+}
+
+void sm_world_grid_totals(const sm_world *w, double *mass, double mom[3], double ang[3]) {
+    const sm_grid *g = &w->grid;
+    const sm_real *vel = sm_grid_vel_arrays(g).vtilde;
+    const int d = w->dim;
+    const size_t nn = g->nactive * (size_t)g->block_nodes;
+    *mass = 0;
+    for (int a = 0; a < 3; a++) mom[a] = ang[a] = 0;
+    for (size_t ni = 0; ni < nn; ni++) {
+        double m = (double)g->mass[ni];
+        if (!(m > 0)) continue;
+        int ijk[3];
+        sm_grid_node_coords(g, ni, ijk);
+        double x[3] = {0, 0, 0}, mv[3] = {0, 0, 0};
+        for (int a = 0; a < d; a++) {
+            x[a] = w->def.domain_min[a] + ijk[a] * w->def.dx;
+            mv[a] = m * (double)vel[ni * (size_t)d + (size_t)a];
+        }
+        *mass += m;
+        for (int a = 0; a < 3; a++) mom[a] += mv[a];
+        ang[0] += x[1] * mv[2] - x[2] * mv[1];
+        ang[1] += x[2] * mv[0] - x[0] * mv[2];
+        ang[2] += x[0] * mv[1] - x[1] * mv[0];
+    }
+}
+
+/* Sum of V0 psi(F^E) (Hencky energy (3.71) of each particle's elastic deformation). */
+static double elastic_energy(const sm_world *w) {
+    const sm_particles *P = &w->p;
+    const int d = w->dim, dd = d * d;
+    double e = 0;
+    for (size_t p = 0; p < P->n; p++) {
+        const sm_material_rt *m = &w->mats[P->mat[p]];
+        sm_real U[9], V[9], s[3];
+        if (d == 2) sm_svd2(P->F + p * (size_t)dd, U, s, V);
+        else sm_svd3(P->F + p * (size_t)dd, U, s, V);
+        e += (double)P->vol0[p] * (double)sm_hencky_psi(d, s, m->law.mu, m->law.lambda);
+    }
+    return e;
+}
+
+void sm_world_diagnostics(const sm_world *w, sm_diagnostics *o) {
+    memset(o, 0, sizeof *o);
+    const int d = w->dim;
+    const sm_particles *P = &w->p;
+    o->particles = P->n;
+    sm_world_particle_totals(w, &o->total_mass, o->momentum, o->angular_momentum);
+    double ke = 0, vmax2 = 0, com[3] = {0, 0, 0};
+    for (size_t p = 0; p < P->n; p++) {
+        double s = 0;
+        for (int a = 0; a < d; a++) {
+            double va = (double)P->v[p * d + a];
+            s += va * va;
+            com[a] += (double)sm_particle_mass(w->mats, P, p) * (double)P->x[p * d + a];
+        }
+        ke += 0.5 * (double)sm_particle_mass(w->mats, P, p) * s;
+        if (s > vmax2) vmax2 = s;
+    }
+    o->kinetic_energy = ke;
+    o->max_speed = sqrt(vmax2);
+    for (int a = 0; a < 3; a++) o->center_of_mass[a] = o->total_mass > 0 ? com[a] / o->total_mass : 0;
+    o->elastic_energy = P->n ? elastic_energy(w) : 0;
+    o->steps = w->steps;
+    o->time = w->time;
+    o->last_dt = w->last_dt;
+    o->min_dt = isfinite(w->min_dt) ? w->min_dt : 0;
+    o->max_dt = w->max_dt;
+    for (int s = 0; s < SM_STAGE_COUNT; s++) o->stage_seconds[s] = w->stage_seconds[s];
+    o->clamped_particles = w->clamped;
+    o->projected_particles = w->projected;
+    o->newton_iterations = w->newton.newton_total;
+    o->gmres_iterations = w->newton.gmres_total;
+    o->last_newton_iterations = w->newton.last_iterations;
+    o->last_newton_residual = w->newton.last_residual;
+    o->newton_unconverged = w->newton.unconverged;
+}
+
+void sm_world_reset_step_stats(sm_world *w) {
+    w->min_dt = INFINITY;
+    w->max_dt = 0;
+}
+
+uint64_t sm_world_state_hash(const sm_world *w) { return sm_particles_hash(&w->p, w->dim); }
+

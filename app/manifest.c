@@ -42,15 +42,18 @@ sm_status sm_manifest_write(const char *path, const sm_world *w, int has_camera,
     return sm_atomic_commit(&a, err, errlen);
 }
 
-sm_status sm_manifest_poses(FILE *f, int frame, const sm_world *w) {
+size_t sm_manifest_poses(char *buf, size_t len, int frame, const sm_world *w) {
     int nc = sm_world_collider_count(w);
-    for (int i = 0; i < nc; i++) {
+    size_t k = 0;
+    for (int i = 0; i < nc && k < len; i++) {
         sm_pose p;
         sm_world_collider_pose(w, i, &p);
-        fprintf(f, "%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", frame, i, p.position[0], p.position[1],
-                p.position[2], p.rotation[0], p.rotation[1], p.rotation[2], p.rotation[3]);
+        int m = snprintf(buf + k, len - k, "%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", frame, i, p.position[0],
+                         p.position[1], p.position[2], p.rotation[0], p.rotation[1], p.rotation[2], p.rotation[3]);
+        if (m < 0) break;
+        k += (size_t)m;
     }
-    return fflush(f) != 0 || ferror(f) ? SM_ERR_IO : SM_OK;
+    return k < len ? k : len;
 }
 
 void sm_manifest_free(sm_manifest *m) {

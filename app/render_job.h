@@ -24,7 +24,8 @@ typedef struct sm_render_job {
 sm_status sm_render_job_open(sm_render_job *j, const char *dir, int width, int height, sm_color_mode color,
                              int threads, char *err, size_t errlen);
 
-/* Renders frame number `frame` (its colliders' poses from the manifest) into the PNG file png. */
+/* Renders frame number `frame` into the PNG file png, the colliders at their poses of that frame
+ * in the manifest; frame -1: at the poses in j->poses (the caller's, e.g. a world's now). */
 sm_status sm_render_job_frame(sm_render_job *j, const sm_frame *fr, int frame, const char *png, char *err,
                               size_t errlen);
 

@@ -4,6 +4,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "app/io/files.h"
 #include "app/run.h"
 
 double sm_run_wall(void) {
@@ -17,14 +18,17 @@ double sm_run_elapsed(const sm_run_frame *fr) { return sm_run_wall() - fr->start
 /* Advances the world to frame f's time; a failure of the world or of the world_error check. */
 static sm_status advance_to(const sm_run_config *cfg, int f, char *err, size_t errlen) {
     sm_world *w = cfg->info.w;
+    const double t0 = sm_world_time(w), t1 = f / cfg->info.fps;
     sm_world_reset_step_stats(w);
-    sm_status s = sm_world_advance(w, f / cfg->info.fps);
+    sm_status s = sm_world_advance(w, t1);
     const char *merr = cfg->world_error ? cfg->world_error(cfg->world_error_ctx) : NULL;
     if (merr) {
         snprintf(err, errlen, "%s", merr);
         return SM_ERR_INVALID;
     }
-    if (s != SM_OK) snprintf(err, errlen, "%s", sm_world_errmsg(w));
+    if (s != SM_OK)
+        snprintf(err, errlen, "frame %d (from t = %.6g s to %.6g s, stopped at t = %.6g s): %s", f, t0, t1, sm_world_time(w),
+                 sm_world_errmsg(w));
     return s;
 }
 
@@ -72,7 +76,7 @@ sm_status sm_run_frames(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm
     if (st == SM_OK) st = frame_loop(cfg, sinks, nsinks, res, err, errlen);
     for (int i = 0; i < begun; i++) {
         if (!sinks[i].end) continue;
-        char e2[1024];
+        char e2[SM_MSG_MAX];
         sm_status se = sinks[i].end(&sinks[i], st, e2, sizeof e2);
         if (se != SM_OK && st == SM_OK) {
             st = se;

@@ -63,7 +63,7 @@ typedef struct sm_run_result {
 } sm_run_result;
 
 /* Runs frames 0..info.frames through the sinks. Returns SM_OK, or the first failure's status
- * with its message in err (a world's failure: its sm_world_errmsg). */
+ * with its message in err (a world's failure: the frame, the times and its sm_world_errmsg). */
 sm_status sm_run_frames(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm_run_result *res, char *err,
                         size_t errlen);
 

@@ -6,6 +6,7 @@
 
 #include "app/io/files.h"
 #include "app/io/csv.h"
+#include "app/io/files.h"
 #include "app/io/ply.h"
 #include "app/io/vtk.h"
 #include "app/manifest.h"
@@ -27,6 +28,30 @@ static sm_status frame_path(char *buf, size_t len, const char *dir, int frame, c
     char name[48];
     snprintf(name, sizeof name, "frame_%04d.%s", frame, ext);
     return join(buf, len, dir, name, err, errlen);
+}
+
+/* A sink's state, zeroed; NULL with "out of memory" in err. */
+static void *new_state(size_t size, char *err, size_t errlen) {
+    void *p = calloc(1, size);
+    if (!p) snprintf(err, errlen, "out of memory");
+    return p;
+}
+
+/* The end of a begin: with st SM_OK the sink keeps p as its state, else p is freed. */
+static sm_status keep_state(sm_sink *s, void *p, sm_status st) {
+    if (st != SM_OK) {
+        free(p);
+        return st;
+    }
+    s->state = p;
+    return SM_OK;
+}
+
+/* The end of an end: the state freed, st returned. */
+static sm_status drop_state(sm_sink *s, sm_status st) {
+    free(s->state);
+    s->state = NULL;
+    return st;
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -51,14 +76,9 @@ typedef struct vtk_state {
 } vtk_state;
 
 static sm_status vtk_begin(sm_sink *s, const sm_run_info *run, char *err, size_t errlen) {
-    vtk_state *v = calloc(1, sizeof *v);
-    if (!v) {
-        snprintf(err, errlen, "out of memory");
-        return SM_ERR_NOMEM;
-    }
     (void)run;
-    s->state = v;
-    return SM_OK;
+    vtk_state *v = new_state(sizeof *v, err, errlen);
+    return v ? keep_state(s, v, SM_OK) : SM_ERR_NOMEM;
 }
 
 static int vtk_grow(vtk_state *v) {
@@ -96,15 +116,20 @@ static sm_status vtk_end(sm_sink *s, sm_status run_status, char *err, size_t err
     for (int i = 0; i < v->count; i++) free(v->names[i]);
     free(v->names);
     free(v->times);
-    free(v);
-    s->state = NULL;
-    return SM_OK;
+    return drop_state(s, SM_OK);
 }
 
 sm_sink sm_sink_vtk(void) { return (sm_sink){"vtk", NULL, NULL, vtk_begin, vtk_frame, vtk_end}; }
 
 /* ------------------------------------------------------------------------------------------ */
 /* manifest                                                                                     */
+
+typedef struct manifest_state {
+    sm_stream poses; /* poses.csv */
+    int frames;      /* frames in it */
+    char *lines;     /* a frame's lines */
+    size_t cap;
+} manifest_state;
 
 static sm_status manifest_begin(sm_sink *s, const sm_run_info *run, char *err, size_t errlen) {
     const sm_manifest_camera *c = s->config;
@@ -113,21 +138,31 @@ static sm_status manifest_begin(sm_sink *s, const sm_run_info *run, char *err, s
     if (st == SM_OK) st = sm_manifest_write(path, run->w, c->has_camera, c->eye, c->target, c->up, c->fov, err, errlen);
     if (st == SM_OK) st = join(path, sizeof path, run->out_dir, "poses.csv", err, errlen);
     if (st != SM_OK) return st;
-    s->state = fopen(path, "w");
-    return SM_OK;
+    manifest_state *m = new_state(sizeof *m, err, errlen);
+    if (!m) return SM_ERR_NOMEM;
+    m->cap = (size_t)sm_world_collider_count(run->w) * SM_POSE_LINE_MAX + 1;
+    if (!(m->lines = malloc(m->cap))) {
+        snprintf(err, errlen, "out of memory");
+        st = SM_ERR_NOMEM;
+    }
+    if (st == SM_OK) st = sm_stream_open(&m->poses, path, err, errlen); /* fails if poses.csv is a folder */
+    if (st != SM_OK) free(m->lines);
+    return keep_state(s, m, st);
 }
 
 static sm_status manifest_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t errlen) {
-    (void)err, (void)errlen;
-    if (s->state) sm_manifest_poses(s->state, fr->frame, fr->w);
-    return SM_OK;
+    manifest_state *m = s->state;
+    size_t n = sm_manifest_poses(m->lines, m->cap, fr->frame, fr->w);
+    sm_status st = sm_stream_append(&m->poses, m->lines, n, err, errlen);
+    m->frames += st == SM_OK;
+    return st;
 }
 
 static sm_status manifest_end(sm_sink *s, sm_status run_status, char *err, size_t errlen) {
-    (void)run_status, (void)err, (void)errlen;
-    if (s->state) fclose(s->state);
-    s->state = NULL;
-    return SM_OK;
+    manifest_state *m = s->state;
+    sm_status st = sm_stream_close(&m->poses, run_status != SM_OK && m->frames == 0, err, errlen);
+    free(m->lines);
+    return drop_state(s, st);
 }
 
 sm_sink sm_sink_manifest(const sm_manifest_camera *camera) {
@@ -140,27 +175,24 @@ sm_sink sm_sink_manifest(const sm_manifest_camera *camera) {
 
 static sm_status png_begin(sm_sink *s, const sm_run_info *run, char *err, size_t errlen) {
     const sm_png_sink_config *c = s->config;
-    sm_render_job *p = calloc(1, sizeof *p);
-    if (!p) {
-        snprintf(err, errlen, "out of memory");
-        return SM_ERR_NOMEM;
-    }
+    sm_render_job *p = new_state(sizeof *p, err, errlen);
+    if (!p) return SM_ERR_NOMEM;
     sm_status st = sm_render_job_open(p, run->out_dir, c->width, c->height, c->color, c->threads, err, errlen);
-    if (st != SM_OK) {
-        sm_render_job_close(p);
-        free(p);
-        return st;
-    }
-    s->state = p;
-    return SM_OK;
+    if (st != SM_OK) sm_render_job_close(p);
+    return keep_state(s, p, st);
 }
 
+/* The colliders are drawn where the world has them now (its poses, in render.txt's order). */
 static sm_status png_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t errlen) {
+    sm_render_job *job = s->state;
     char path[SM_PATH_MAX];
     sm_frame f;
     sm_status st = sm_frame_from_world(fr->w, &f, err, errlen);
     if (st == SM_OK) st = frame_path(path, sizeof path, fr->out_dir, fr->frame, "png", err, errlen);
-    if (st == SM_OK) st = sm_render_job_frame(s->state, &f, fr->frame, path, err, errlen);
+    if (st == SM_OK && job->poses)
+        for (int i = 0; i < job->m.ncolliders && i < sm_world_collider_count(fr->w); i++)
+            sm_world_collider_pose(fr->w, i, &job->poses[i]);
+    if (st == SM_OK) st = sm_render_job_frame(job, &f, job->poses ? -1 : fr->frame, path, err, errlen);
     sm_frame_free(&f);
     return st;
 }
@@ -168,9 +200,7 @@ static sm_status png_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t
 static sm_status png_end(sm_sink *s, sm_status run_status, char *err, size_t errlen) {
     (void)run_status, (void)err, (void)errlen;
     sm_render_job_close(s->state);
-    free(s->state);
-    s->state = NULL;
-    return SM_OK;
+    return drop_state(s, SM_OK);
 }
 
 sm_sink sm_sink_png(const sm_png_sink_config *config) {
@@ -181,48 +211,36 @@ sm_sink sm_sink_png(const sm_png_sink_config *config) {
 /* csv                                                                                          */
 
 typedef struct csv_state {
-    FILE *f;
-    char path[SM_PATH_MAX];
+    sm_stream f;
+    int rows; /* frame rows written */
 } csv_state;
 
 static sm_status csv_begin(sm_sink *s, const sm_run_info *run, char *err, size_t errlen) {
-    csv_state *c = calloc(1, sizeof *c);
-    if (!c) {
-        snprintf(err, errlen, "out of memory");
-        return SM_ERR_NOMEM;
+    csv_state *c = new_state(sizeof *c, err, errlen);
+    if (!c) return SM_ERR_NOMEM;
+    char path[SM_PATH_MAX], line[SM_CSV_LINE_MAX];
+    sm_status st = join(path, sizeof path, run->out_dir, "diagnostics.csv", err, errlen);
+    if (st == SM_OK) st = sm_stream_open(&c->f, path, err, errlen);
+    if (st == SM_OK && (st = sm_stream_append(&c->f, line, (size_t)sm_csv_header(line, sizeof line), err, errlen)) != SM_OK) {
+        char ignored[8];
+        sm_stream_close(&c->f, 1, ignored, sizeof ignored); /* the append's message is the one to keep */
     }
-    sm_status st = join(c->path, sizeof c->path, run->out_dir, "diagnostics.csv", err, errlen);
-    if (st == SM_OK && !(c->f = fopen(c->path, "w"))) {
-        snprintf(err, errlen, "%s: %s", c->path, strerror(errno));
-        st = SM_ERR_IO;
-    }
-    if (st != SM_OK) {
-        free(c);
-        return st;
-    }
-    sm_csv_header(c->f);
-    s->state = c;
-    return SM_OK;
+    return keep_state(s, c, st);
 }
 
 static sm_status csv_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t errlen) {
-    (void)err, (void)errlen;
     csv_state *c = s->state;
-    sm_csv_row(c->f, fr->frame, fr->d, sm_run_elapsed(fr));
-    return SM_OK;
+    char line[SM_CSV_LINE_MAX];
+    int n = sm_csv_row(line, sizeof line, fr->frame, fr->d, sm_run_elapsed(fr));
+    sm_status st = sm_stream_append(&c->f, line, n < (int)sizeof line ? (size_t)n : sizeof line - 1, err, errlen);
+    c->rows += st == SM_OK;
+    return st;
 }
 
+/* A failed run that wrote no row leaves no diagnostics.csv (a header alone says nothing). */
 static sm_status csv_end(sm_sink *s, sm_status run_status, char *err, size_t errlen) {
-    (void)run_status;
     csv_state *c = s->state;
-    sm_status st = SM_OK;
-    if (fclose(c->f) != 0) {
-        snprintf(err, errlen, "%s: %s", c->path, strerror(errno));
-        st = SM_ERR_IO;
-    }
-    free(c);
-    s->state = NULL;
-    return st;
+    return drop_state(s, sm_stream_close(&c->f, run_status != SM_OK && c->rows == 0, err, errlen));
 }
 
 sm_sink sm_sink_csv(void) { return (sm_sink){"csv", NULL, NULL, csv_begin, csv_frame, csv_end}; }

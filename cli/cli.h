@@ -4,10 +4,11 @@
  *   usage.c     the help texts
  *   options.c   what the commands share: option parsing, loading and building a scene, the video
  *   cmd_run.c   `sandmpm run`: the sinks and the frame loop (app/run.h); progress.c: its progress line
- *   cmd_info.c, cmd_render.c, cmd_bench.c: the other commands */
+ *   cmd_info.c, cmd_render.c, cmd_bench.c: the other commands; signals.c: SIGINT and SIGTERM */
 #ifndef SM_CLI_H
 #define SM_CLI_H
 
+#include <signal.h>
 #include <stddef.h>
 #include <stdio.h>
 
@@ -22,6 +23,8 @@ extern const char sm_default_scene[]; /* scenes/default.lua, embedded at build t
 
 /* The program's exit code for a command's status. */
 int cli_exit_code(sm_status s);
+/* The exit code of a command stopped by signal sig (the shell's convention, 128 + sig). */
+int cli_exit_code_signal(int sig);
 /* The status an exit code of this program (e.g. the bench sibling's) stands for. */
 sm_status cli_status_of_exit_code(int code);
 /* "exit codes: 0 done, 2 bad input, ..." and a newline. */
@@ -46,6 +49,7 @@ void cli_usage_bench(FILE *f);
 /* options.c                                                                                    */
 
 #define CLI_MAX_PARAMS 64
+#define CLI_MAX_FRAMES 10000000 /* frames of a run */
 
 /* 1 if any argument is --help or -h: the command then prints its usage and does nothing else. */
 int cli_help_requested(int argc, char **argv);
@@ -76,16 +80,34 @@ sm_status cli_check_memory(const char *cmd, const sm_scene_settings *st);
 sm_status cli_build_scene(const char *cmd, sm_scene *sc);
 /* Physical memory of this machine, bytes (0 if unknown). */
 double cli_machine_bytes(void);
+/* Removes from dir the temporaries that a killed run or render left (app/io/files.h), saying so. */
+sm_status cli_remove_stale(const char *cmd, const char *dir);
 /* dir/video.mp4 from dir's PNG frames at fps (app/io/video.h); the outcome printed. */
 sm_status cli_make_video(const char *dir, double fps);
 
 /* ------------------------------------------------------------------------------------------ */
-/* The commands: argv after the command's name. Each prints its messages and returns a status. */
+/* signals.c                                                                                    */
 
-sm_status cli_run(int argc, char **argv);
-sm_status cli_info(int argc, char **argv);
-sm_status cli_render(int argc, char **argv);
-sm_status cli_bench(int argc, char **argv);
+/* 0, or the signal (SIGINT, SIGTERM) that asked the command to stop after the frame in progress. */
+extern volatile sig_atomic_t cli_stop;
+/* Handles SIGINT and SIGTERM: the first sets cli_stop; the second removes the temporaries being
+ * written, prints the last note and exits. */
+void cli_signals_install(void);
+/* What an immediate stop leaves complete, e.g. "sandmpm run: ...; frames 0..4 are complete in DIR/". */
+void cli_signals_note(const char *note);
+/* "SIGINT", "SIGTERM". */
+const char *cli_signal_name(int sig);
+/* A sink (app/run.h) that keeps the note up to date: the frames complete in the run's folder. */
+sm_sink cli_interrupt_note_sink(void);
+
+/* ------------------------------------------------------------------------------------------ */
+/* The commands: argv after the command's name. Each prints its messages and returns its exit
+ * code (exit.c). */
+
+int cli_run(int argc, char **argv);
+int cli_info(int argc, char **argv);
+int cli_render(int argc, char **argv);
+int cli_bench(int argc, char **argv);
 
 /* progress.c: the run's banner and progress line on stderr, as a sink (app/run.h). */
 typedef struct cli_progress_config {

@@ -6,10 +6,11 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include "app/bench.h"
+#include "app/io/files.h"
+#include "app/io/spawn.h"
 #include "cli/cli.h"
 
 #define BENCH_MAX_THREADS 16
@@ -209,91 +210,91 @@ static int bench_sibling(char *path, size_t len) {
     return access(path, X_OK) == 0;
 }
 
-/* Runs the cases of the other precision in the sibling program and emits its rows as they come. */
-static sm_status bench_remote(const bench_opts *o, const char *path, int is_double) {
-    char dims[8] = "", threads[BENCH_MAX_THREADS * 6] = "", particles[32], steps[16], warmup[16];
+/* The sibling's arguments for this run's cases of the other precision (strings in bufs). */
+typedef struct sibling_args {
+    char dims[8], threads[BENCH_MAX_THREADS * 6], particles[32], steps[16], warmup[16];
+    char *argv[20];
+} sibling_args;
+
+static void sibling_argv(const bench_opts *o, const char *path, const char *prec, sibling_args *sa) {
     size_t k = 0;
+    sa->dims[0] = sa->threads[0] = 0;
     for (int d = 2; d <= 3; d++)
-        if (o->dim_mask & (1 << d)) k += (size_t)snprintf(dims + k, sizeof dims - k, "%s%d", k ? "," : "", d);
+        if (o->dim_mask & (1 << d)) k += (size_t)snprintf(sa->dims + k, sizeof sa->dims - k, "%s%d", k ? "," : "", d);
     k = 0;
     for (int t = 0; t < o->nthreads; t++)
-        k += (size_t)snprintf(threads + k, sizeof threads - k, "%s%d", t ? "," : "", o->threads[t]);
-    snprintf(particles, sizeof particles, "%.17g", o->c.particles);
-    snprintf(steps, sizeof steps, "%d", o->c.steps);
-    snprintf(warmup, sizeof warmup, "%d", o->c.warmup);
-    const char *prec = sm_bench_precision_name(is_double);
-    char *args[] = {(char *)path,      "bench",    "--sibling-rows", "--precision", (char *)prec, "--dim", dims,
-                    "--threads",       threads,    "--particles",    particles,     "--steps",    steps,   "--warmup",
-                    warmup,            o->progress ? "--sibling-progress" : NULL, NULL};
-    int fd[2];
-    if (pipe(fd) != 0) {
-        fprintf(stderr, "sandmpm bench: pipe: %s\n", strerror(errno));
-        return SM_ERR_IO;
-    }
-    fflush(stdout);
-    fflush(stderr);
-    pid_t pid = fork();
-    if (pid < 0) {
-        fprintf(stderr, "sandmpm bench: fork: %s\n", strerror(errno));
-        close(fd[0]);
-        close(fd[1]);
-        return SM_ERR_IO;
-    }
-    if (pid == 0) {
-        close(fd[0]);
-        if (dup2(fd[1], STDOUT_FILENO) < 0) _exit(cli_exit_code(SM_ERR_IO));
-        close(fd[1]);
-        execv(path, args);
-        fprintf(stderr, "sandmpm bench: cannot run %s: %s\n", path, strerror(errno));
-        _exit(cli_exit_code(SM_ERR_IO));
-    }
-    close(fd[1]);
-    FILE *in = fdopen(fd[0], "r");
+        k += (size_t)snprintf(sa->threads + k, sizeof sa->threads - k, "%s%d", t ? "," : "", o->threads[t]);
+    snprintf(sa->particles, sizeof sa->particles, "%.17g", o->c.particles);
+    snprintf(sa->steps, sizeof sa->steps, "%d", o->c.steps);
+    snprintf(sa->warmup, sizeof sa->warmup, "%d", o->c.warmup);
+    char *args[] = {(char *)path, "bench",       "--sibling-rows", "--precision", (char *)prec,  "--dim",
+                    sa->dims,     "--threads",   sa->threads,      "--particles", sa->particles, "--steps",
+                    sa->steps,    "--warmup",    sa->warmup,       o->progress ? "--sibling-progress" : NULL, NULL};
+    memcpy(sa->argv, args, sizeof args);
+}
+
+/* Reads the sibling's rows and emits them; drains the pipe after an error, so that the sibling is
+ * not stopped by a broken pipe. */
+static sm_status read_rows(const bench_opts *o, FILE *in, const char *path, int is_double) {
     sm_status rc = SM_OK;
-    if (!in) {
-        fprintf(stderr, "sandmpm bench: %s\n", strerror(errno));
-        close(fd[0]);
-        rc = SM_ERR_IO;
-    } else {
-        char *line = NULL;
-        size_t cap = 0;
-        while (getline(&line, &cap, in) > 0) {
-            if (rc != SM_OK) continue; /* drain, so the sibling is not stopped by a broken pipe */
-            sm_bench_result r;
-            char err[256];
-            if (sm_bench_parse_raw(line, &r, err, sizeof err) != SM_OK) {
-                fprintf(stderr, "sandmpm bench: %s: %s\n", path, err);
-                rc = SM_ERR_IO;
-            } else if (r.is_double != is_double) {
-                fprintf(stderr, "sandmpm bench: %s measured %s, not %s\n", path, sm_bench_precision_name(r.is_double),
-                        prec);
-                rc = SM_ERR_IO;
-            } else {
-                bench_emit(o, &r);
-            }
+    char *line = NULL;
+    size_t cap = 0;
+    while (getline(&line, &cap, in) > 0) {
+        if (rc != SM_OK) continue;
+        sm_bench_result r;
+        char err[256];
+        if (sm_bench_parse_raw(line, &r, err, sizeof err) != SM_OK) {
+            fprintf(stderr, "sandmpm bench: %s: %s\n", path, err);
+            rc = SM_ERR_IO;
+        } else if (r.is_double != is_double) {
+            fprintf(stderr, "sandmpm bench: %s measured %s, not %s\n", path, sm_bench_precision_name(r.is_double),
+                    sm_bench_precision_name(is_double));
+            rc = SM_ERR_IO;
+        } else {
+            bench_emit(o, &r);
         }
-        free(line);
-        fclose(in);
     }
-    int status = 0;
-    while (waitpid(pid, &status, 0) < 0)
-        if (errno != EINTR) {
-            fprintf(stderr, "sandmpm bench: waitpid: %s\n", strerror(errno));
-            return SM_ERR_IO;
-        }
-    if (WIFSIGNALED(status)) {
-        fprintf(stderr, "sandmpm bench: %s (the %s cases) was killed by signal %d%s\n", path, prec, WTERMSIG(status),
-                WTERMSIG(status) == SIGKILL ? " (out of memory?)" : "");
-        return WTERMSIG(status) == SIGKILL ? SM_ERR_NOMEM : SM_ERR_NUMERICAL;
-    }
-    if (WIFEXITED(status) && WEXITSTATUS(status) != 0) {
-        fprintf(stderr, "sandmpm bench: %s (the %s cases) failed with exit code %d\n", path, prec, WEXITSTATUS(status));
-        return cli_status_of_exit_code(WEXITSTATUS(status));
-    }
+    free(line);
     return rc;
 }
 
-sm_status cli_bench(int argc, char **argv) {
+/* Runs the cases of the other precision in the sibling program and emits its rows as they come. */
+static sm_status bench_remote(const bench_opts *o, const char *path, int is_double) {
+    const char *prec = sm_bench_precision_name(is_double);
+    sibling_args sa;
+    sibling_argv(o, path, prec, &sa);
+    sm_child child;
+    char err[SM_MSG_MAX];
+    if (sm_spawn(sa.argv, 1, &child, NULL, err, sizeof err) != SM_OK) {
+        fprintf(stderr, "sandmpm bench: %s\n", err);
+        return SM_ERR_IO;
+    }
+    FILE *in = fdopen(child.out_fd, "r");
+    sm_status rc = SM_OK;
+    if (!in) {
+        fprintf(stderr, "sandmpm bench: %s\n", strerror(errno));
+        close(child.out_fd);
+        rc = SM_ERR_IO;
+    } else {
+        rc = read_rows(o, in, path, is_double);
+        fclose(in);
+    }
+    int code, sig;
+    if (sm_child_wait(&child, &code, &sig) == 0) return rc;
+    if (sig) {
+        fprintf(stderr, "sandmpm bench: %s (the %s cases) was killed by signal %d%s\n", path, prec, sig,
+                sig == SIGKILL ? " (out of memory?)" : "");
+        return sig == SIGKILL ? SM_ERR_NOMEM : SM_ERR_NUMERICAL;
+    }
+    if (code < 0) {
+        fprintf(stderr, "sandmpm bench: waitpid: %s\n", strerror(errno));
+        return SM_ERR_IO;
+    }
+    fprintf(stderr, "sandmpm bench: %s (the %s cases) failed with exit code %d\n", path, prec, code);
+    return cli_status_of_exit_code(code);
+}
+
+static sm_status bench_command(int argc, char **argv) {
     if (cli_help_requested(argc, argv)) {
         cli_usage_bench(stdout);
         return SM_OK;
@@ -333,3 +334,5 @@ sm_status cli_bench(int argc, char **argv) {
     }
     return rc;
 }
+
+int cli_bench(int argc, char **argv) { return cli_exit_code(bench_command(argc, argv)); }

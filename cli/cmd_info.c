@@ -40,7 +40,7 @@ static void print_world(sm_scene *sc) {
     printf("time step    max %g s, CFL %g; first step %g s\n", wd->max_dt, wd->cfl, first);
 }
 
-sm_status cli_info(int argc, char **argv) {
+static sm_status info_command(int argc, char **argv) {
     if (cli_help_requested(argc, argv)) {
         cli_usage_info(stdout);
         return SM_OK;
@@ -67,3 +67,5 @@ sm_status cli_info(int argc, char **argv) {
     sm_scene_destroy(sc);
     return st;
 }
+
+int cli_info(int argc, char **argv) { return cli_exit_code(info_command(argc, argv)); }

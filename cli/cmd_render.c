@@ -3,6 +3,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <string.h>
+#include <stdlib.h>
 #include <unistd.h>
 
 #include "app/io/files.h"
@@ -61,6 +62,19 @@ static sm_status parse_args(int argc, char **argv, render_args *a) {
     return SM_OK;
 }
 
+/* The frame number of a frame file's name "frame_NNNN.ply" (at least 4 digits, as the run writes
+ * them: %04d), or -1. */
+static int frame_number(const char *name) {
+    size_t n = strlen(name), d = 6;
+    if (n < 14 || strncmp(name, "frame_", 6) != 0 || strcmp(name + n - 4, ".ply") != 0) return -1;
+    while (d < n - 4 && name[d] >= '0' && name[d] <= '9') d++;
+    if (d != n - 4 || d - 6 < 4 || d - 6 > 9) return -1;
+    int f = atoi(name + 6);
+    char again[32];
+    snprintf(again, sizeof again, "frame_%04d.ply", f);
+    return strcmp(again, name) == 0 ? f : -1; /* not frame_00012.ply */
+}
+
 /* The frame_NNNN.ply files in dir: how many, and the largest frame number. */
 static sm_status scan_frames(const char *dir, int *count, int *maxf) {
     DIR *dd = opendir(dir);
@@ -72,12 +86,10 @@ static sm_status scan_frames(const char *dir, int *count, int *maxf) {
     *count = 0;
     struct dirent *de;
     while ((de = readdir(dd))) {
-        int fno;
-        char tail[8];
-        if (sscanf(de->d_name, "frame_%d.pl%1[y]", &fno, tail) == 2 && strlen(de->d_name) == 14) {
-            ++*count;
-            if (fno > *maxf) *maxf = fno;
-        }
+        int fno = frame_number(de->d_name);
+        if (fno < 0) continue;
+        ++*count;
+        if (fno > *maxf) *maxf = fno;
     }
     closedir(dd);
     if (*count == 0) {
@@ -110,32 +122,50 @@ static sm_status make_video(const char *dir) {
     return cli_make_video(dir, sm_csv_read_fps(p, 24));
 }
 
-sm_status cli_render(int argc, char **argv) {
-    if (cli_help_requested(argc, argv)) {
-        cli_usage_render(stdout);
-        return SM_OK;
-    }
-    render_args a;
-    int count, maxf;
-    sm_status st = parse_args(argc, argv, &a);
-    if (st == SM_OK) st = scan_frames(a.dir, &count, &maxf);
-    if (st != SM_OK) return st;
-    char err[1024];
+/* Renders the frames in order; stops early after a frame if cli_stop is set. */
+static sm_status render_all(const render_args *a, int count, int maxf, int *done) {
+    char err[SM_MSG_MAX], note[SM_MSG_MAX];
     sm_render_job job;
-    st = sm_render_job_open(&job, a.dir, a.width, a.height, a.color, a.threads, err, sizeof err);
+    sm_status st = sm_render_job_open(&job, a->dir, a->width, a->height, a->color, a->threads, err, sizeof err);
     const int tty = isatty(fileno(stderr));
     const double t0 = sm_run_wall();
-    int done = 0;
-    for (int f = 0; f <= maxf && st == SM_OK; f++) {
-        st = render_frame(&job, a.dir, f, &done, err, sizeof err);
-        if (st == SM_OK && tty) fprintf(stderr, "\rrendered %d/%d", done, count);
+    *done = 0;
+    for (int f = 0; f <= maxf && st == SM_OK && !cli_stop; f++) {
+        st = render_frame(&job, a->dir, f, done, err, sizeof err);
+        if (st == SM_OK && tty) fprintf(stderr, "\rrendered %d/%d", *done, count);
+        snprintf(note, sizeof note, "sandmpm render: stopped at once; %d frames rendered to %s/", *done, a->dir);
+        cli_signals_note(note);
     }
     sm_render_job_close(&job);
     if (st != SM_OK) {
-        fprintf(stderr, "sandmpm render: %s\n", err);
+        fprintf(stderr, "%ssandmpm render: %s\n", tty ? "\n" : "", err);
         return st;
     }
-    fprintf(stderr, "%srendered %d frames to %s/frame_NNNN.png in %.1f s\n", tty ? "\r" : "", done, a.dir,
+    fprintf(stderr, "%srendered %d frames to %s/frame_NNNN.png in %.1f s\n", tty ? "\r" : "", *done, a->dir,
             sm_run_wall() - t0);
-    return a.video ? make_video(a.dir) : SM_OK;
+    return SM_OK;
 }
+
+static int render_command(int argc, char **argv) {
+    if (cli_help_requested(argc, argv)) {
+        cli_usage_render(stdout);
+        return cli_exit_code(SM_OK);
+    }
+    render_args a;
+    int count, maxf, done = 0;
+    sm_status st = parse_args(argc, argv, &a);
+    if (st == SM_OK) st = scan_frames(a.dir, &count, &maxf);
+    if (st == SM_OK) st = cli_remove_stale("render", a.dir);
+    if (st != SM_OK) return cli_exit_code(st);
+    cli_signals_install();
+    st = render_all(&a, count, maxf, &done);
+    if (cli_stop) {
+        fprintf(stderr, "sandmpm render: stopped by %s after %d of %d frames\n", cli_signal_name(cli_stop), done, count);
+        return cli_exit_code_signal(cli_stop);
+    }
+    if (st == SM_OK && a.video) st = make_video(a.dir);
+    if (cli_stop) return cli_exit_code_signal(cli_stop);
+    return cli_exit_code(st);
+}
+
+int cli_render(int argc, char **argv) { return render_command(argc, argv); }

@@ -1,4 +1,7 @@
-/* The one place the program's exit codes are chosen: a table from sm_status to exit code. */
+/* The one place the program's exit codes are chosen: a table from sm_status to exit code, and
+ * 128 + the signal for a command stopped by SIGINT or SIGTERM. */
+#include <signal.h>
+
 #include "cli/cli.h"
 
 static const struct {
@@ -23,6 +26,8 @@ int cli_exit_code(sm_status s) {
     return EXIT_UNKNOWN_STATUS;
 }
 
+int cli_exit_code_signal(int sig) { return 128 + sig; }
+
 sm_status cli_status_of_exit_code(int code) {
     for (int i = 0; i < EXIT_TABLE_SIZE; i++)
         if (exit_table[i].code == code) return exit_table[i].status;
@@ -33,5 +38,6 @@ void cli_print_exit_codes(FILE *f) {
     fprintf(f, "exit codes:");
     for (int i = 0; i < EXIT_TABLE_SIZE; i++)
         fprintf(f, "%s %d %s", i ? "," : "", exit_table[i].code, exit_table[i].meaning);
-    fprintf(f, "\n");
+    fprintf(f, ", %d stopped by SIGINT (Ctrl-C), %d by SIGTERM\n", cli_exit_code_signal(SIGINT),
+            cli_exit_code_signal(SIGTERM));
 }

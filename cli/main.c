@@ -16,27 +16,25 @@
 
 static const struct {
     const char *name;
-    sm_status (*run)(int argc, char **argv);
+    int (*run)(int argc, char **argv);
 } commands[] = {{"run", cli_run}, {"info", cli_info}, {"render", cli_render}, {"bench", cli_bench}};
 
-static sm_status dispatch(int argc, char **argv) {
+int main(int argc, char **argv) {
     if (argc < 2) {
         cli_usage(stderr);
-        return SM_ERR_INVALID;
+        return cli_exit_code(SM_ERR_INVALID);
     }
     const char *c = argv[1];
     if (!strcmp(c, "--help") || !strcmp(c, "-h") || !strcmp(c, "help")) {
         cli_usage(stdout);
-        return SM_OK;
+        return cli_exit_code(SM_OK);
     }
     if (!strcmp(c, "--version")) {
         printf("sandmpm %s (%s precision)\n", sm_version(), sm_real_is_double() ? "double" : "float");
-        return SM_OK;
+        return cli_exit_code(SM_OK);
     }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(c, commands[i].name)) return commands[i].run(argc - 2, argv + 2);
     fprintf(stderr, "sandmpm: unknown command \"%s\" (see sandmpm --help)\n", c);
-    return SM_ERR_INVALID;
+    return cli_exit_code(SM_ERR_INVALID);
 }
-
-int main(int argc, char **argv) { return cli_exit_code(dispatch(argc, argv)); }

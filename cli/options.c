@@ -143,3 +143,14 @@ sm_status cli_make_video(const char *dir, double fps) {
     else fprintf(stderr, "sandmpm: wrote %s/video.mp4\n", dir);
     return st;
 }
+
+sm_status cli_remove_stale(const char *cmd, const char *dir) {
+    char err[SM_MSG_MAX], first[256];
+    int removed = 0;
+    sm_status st = sm_remove_stale_temporaries(dir, &removed, first, sizeof first, err, sizeof err);
+    if (st != SM_OK) fprintf(stderr, "sandmpm %s: %s\n", cmd, err);
+    else if (removed)
+        fprintf(stderr, "sandmpm %s: removed %d temporary file%s (%s%s) that a killed process left in %s/\n", cmd, removed,
+                removed == 1 ? "" : "s", first, removed > 1 ? ", ..." : "", dir);
+    return st;
+}

@@ -30,7 +30,12 @@ void cli_usage_run(FILE *f) {
                "  --render           also render each frame to OUTDIR/frame_NNNN.png\n"
                "  --video            with --render: assemble OUTDIR/video.mp4 with ffmpeg at the end\n\n"
                "Writes per frame (as the scene's outputs table says): frame_NNNN.ply (binary PLY),\n"
-               "frame_NNNN.vtp with frames.pvd (VTK/ParaView), and diagnostics.csv; each file atomically.\n");
+               "frame_NNNN.vtp with frames.pvd (VTK/ParaView), and diagnostics.csv; each file atomically\n"
+               "(written as .NAME.tmp.PID, then renamed), so a file under its name is always whole.\n\n"
+               "Ctrl-C (SIGINT) or SIGTERM stops after the frame in progress and says which frames are\n"
+               "complete; a second one stops at once (the files being written are removed). Temporaries\n"
+               "that a killed run left are removed by the next run in the folder. A write that fails (a\n"
+               "full disk, no permission) stops the run with exit code 4, the file and the reason.\n");
 }
 
 void cli_usage_info(FILE *f) {
@@ -46,7 +51,8 @@ void cli_usage_render(FILE *f) {
                "spheres with shadows (disks in 2D), random brown tones (or colour by speed, material, or\n"
                "hardening q), the ground and the colliders (from OUTDIR/render.txt, written by `run`).\n"
                "  --size WxH   image size (default 1280x720)\n"
-               "  --video      assemble OUTDIR/video.mp4 with ffmpeg (if installed)\n");
+               "  --video      assemble OUTDIR/video.mp4 with ffmpeg (if installed)\n"
+               "Ctrl-C stops after the frame in progress; PNG files are written atomically.\n");
 }
 
 void cli_usage_bench(FILE *f) {

@@ -2,9 +2,12 @@
  * (header and every property of every particle) and VTK XML PolyData (every appended array, the
  * vertex cells), in 2D and 3D, after some steps so that velocities, F and q are not trivial. The
  * write is atomic: no temporary file is left behind. */
+#define _POSIX_C_SOURCE 200809L
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
+#include "app/io/files.h"
 #include "app/io/ply.h"
 #include "app/io/vtk.h"
 #include "test_util.h"
@@ -88,7 +91,7 @@ int main(void) {
         CHECK(sm_write_ply(w, ply, err, sizeof err) == SM_OK);
         CHECK(sm_write_vtp(w, vtp, err, sizeof err) == SM_OK);
         char tmpname[256];
-        snprintf(tmpname, sizeof tmpname, "%s.tmp", ply);
+        CHECK(sm_temp_name(tmpname, sizeof tmpname, ply, (long)getpid()) == 0);
         FILE *t = fopen(tmpname, "rb");
         CHECK(t == NULL);
         if (t) fclose(t);
@@ -193,6 +196,7 @@ int main(void) {
         free(b);
         /* Unwritable path: an error message, no crash. */
         CHECK(sm_write_ply(w, "/nonexistent-dir/x.ply", err, sizeof err) == SM_ERR_IO);
+        CHECK(strstr(err, "No such file or directory") != NULL); /* the reason */
         CHECK(strstr(err, "/nonexistent-dir/x.ply") != NULL);
         printf("%dD: %zu particles written and read back (PLY %zu bytes per particle)\n", dim, pv.n, rec);
         sm_world_destroy(w);

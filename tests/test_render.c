@@ -20,6 +20,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "app/io/files.h"
 #include "app/io/ply.h"
 #include "app/io/png.h"
 #include "app/render.h"
@@ -290,7 +291,7 @@ static void test_scene(void) {
     CHECK(back && memcmp(back, img, W * H * 3) == 0);
     free(back);
     char tmpname[600];
-    snprintf(tmpname, sizeof tmpname, "%s.tmp", path);
+    CHECK(sm_temp_name(tmpname, sizeof tmpname, path, (long)getpid()) == 0);
     CHECK(access(tmpname, F_OK) != 0); /* atomic: no temporary left */
     CHECK(sm_png_write("/nonexistent-dir/x.png", W, H, img, err, sizeof err) == SM_ERR_IO);
     CHECK_MSG(err, "/nonexistent-dir/x.png");

@@ -1,17 +1,17 @@
 /* diagnostics.csv rows; see csv.h. */
+#include <stdio.h>
+
 #include "app/io/csv.h"
 
-sm_status sm_csv_header(FILE *f) {
-    fprintf(f, "frame,time,steps,min_dt,max_dt,particles,kinetic_energy,elastic_energy,momentum_x,momentum_y,"
-               "momentum_z,max_speed,wall_seconds\n");
-    return ferror(f) ? SM_ERR_IO : SM_OK;
+int sm_csv_header(char *buf, size_t len) {
+    return snprintf(buf, len, "frame,time,steps,min_dt,max_dt,particles,kinetic_energy,elastic_energy,momentum_x,"
+                              "momentum_y,momentum_z,max_speed,wall_seconds\n");
 }
 
-sm_status sm_csv_row(FILE *f, int frame, const sm_diagnostics *d, double wall) {
-    fprintf(f, "%d,%.9g,%llu,%.6g,%.6g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.4f\n", frame, d->time,
-            (unsigned long long)d->steps, d->min_dt, d->max_dt, d->particles, d->kinetic_energy, d->elastic_energy,
-            d->momentum[0], d->momentum[1], d->momentum[2], d->max_speed, wall);
-    return fflush(f) != 0 || ferror(f) ? SM_ERR_IO : SM_OK;
+int sm_csv_row(char *buf, size_t len, int frame, const sm_diagnostics *d, double wall) {
+    return snprintf(buf, len, "%d,%.9g,%llu,%.6g,%.6g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.4f\n", frame, d->time,
+                    (unsigned long long)d->steps, d->min_dt, d->max_dt, d->particles, d->kinetic_energy,
+                    d->elastic_energy, d->momentum[0], d->momentum[1], d->momentum[2], d->max_speed, wall);
 }
 
 double sm_csv_read_fps(const char *path, double fallback) {

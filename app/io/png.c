@@ -66,13 +66,13 @@ sm_status sm_png_write(const char *path, int w, int h, const uint8_t *rgb, char 
     errno = 0;
     int r = png_write_core(a.f, w, h, rgb, &pe);
     if (r != 0) {
-        int e = errno;
+        int e = sm_atomic_error(&a) ? sm_atomic_error(&a) : errno;
         sm_atomic_abort(&a);
         if (r == -2) {
             snprintf(err, errlen, "%s: out of memory", path);
             return SM_ERR_NOMEM;
         }
-        snprintf(err, errlen, "%s: PNG write failed: %s", path, pe.msg[0] ? pe.msg : strerror(e));
+        snprintf(err, errlen, "%s: %s", path, e ? strerror(e) : pe.msg[0] ? pe.msg : "PNG write failed");
         return SM_ERR_IO;
     }
     return sm_atomic_commit(&a, err, errlen);

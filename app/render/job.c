@@ -53,7 +53,8 @@ sm_status sm_render_job_open(sm_render_job *j, const char *dir, int width, int h
 
 sm_status sm_render_job_frame(sm_render_job *j, const sm_frame *fr, int frame, const char *png, char *err,
                               size_t errlen) {
-    j->o.poses = j->poses ? sm_manifest_frame_poses(&j->m, frame, j->poses) : NULL;
+    if (frame >= 0) j->o.poses = j->poses ? sm_manifest_frame_poses(&j->m, frame, j->poses) : NULL;
+    else j->o.poses = j->poses;
     sm_status st = sm_render(fr, &j->o, j->rgb, err, errlen);
     if (st == SM_OK) st = sm_png_write(png, j->o.width, j->o.height, j->rgb, err, errlen);
     j->o.poses = NULL;

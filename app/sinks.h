@@ -3,10 +3,12 @@
  *   vtk       frame_NNNN.vtp per frame and frames.pvd listing them (app/io/vtk.h)
  *   manifest  render.txt at the start, the colliders' poses of every frame in poses.csv
  *             (app/manifest.h)
- *   png       frame_NNNN.png per frame, rendered as `sandmpm render` would (app/render_job.h); it
- *             reads render.txt, so it comes after the manifest sink
+ *   png       frame_NNNN.png per frame, rendered as `sandmpm render` would (app/render_job.h),
+ *             the colliders at the world's poses of the frame; it reads render.txt, so it comes
+ *             after the manifest sink
  *   csv       diagnostics.csv, a row per frame (app/io/csv.h)
- * Frame files are written atomically (app/io/files.h). */
+ * Frame files are written atomically, the two CSV files a whole line at a time (app/io/files.h); a
+ * failed run removes a CSV file that got no frame's line. */
 #ifndef SM_APP_SINKS_H
 #define SM_APP_SINKS_H
 

@@ -59,7 +59,10 @@ static sm_status parse_args(int argc, char **argv, render_args *a) {
         fprintf(stderr, "sandmpm render: which run? usage: sandmpm render OUTDIR\n");
         return SM_ERR_INVALID;
     }
-    return SM_OK;
+    char err[SM_MSG_MAX];
+    sm_status st = sm_check_folder_name(a->dir, err, sizeof err);
+    if (st != SM_OK) fprintf(stderr, "sandmpm render: %s\n", err);
+    return st;
 }
 
 /* The frame number of a frame file's name "frame_NNNN.ply" (at least 4 digits, as the run writes

@@ -10,6 +10,8 @@
  *
  * Exit codes (cli/exit.c): 0 done, 2 bad input, 3 numerical failure, 4 I/O failure, 5 out of
  * memory. The commands are in cli/cmd_*.c. */
+#include <errno.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "cli/cli.h"
@@ -19,7 +21,7 @@ static const struct {
     int (*run)(int argc, char **argv);
 } commands[] = {{"run", cli_run}, {"info", cli_info}, {"render", cli_render}, {"bench", cli_bench}};
 
-int main(int argc, char **argv) {
+static int dispatch(int argc, char **argv) {
     if (argc < 2) {
         cli_usage(stderr);
         return cli_exit_code(SM_ERR_INVALID);
@@ -37,4 +39,15 @@ int main(int argc, char **argv) {
         if (!strcmp(c, commands[i].name)) return commands[i].run(argc - 2, argv + 2);
     fprintf(stderr, "sandmpm: unknown command \"%s\" (see sandmpm --help)\n", c);
     return cli_exit_code(SM_ERR_INVALID);
+}
+
+/* What went to stdout (info, bench's table, help) is checked too: a full disk or a closed pipe is
+ * an I/O failure, not success. */
+int main(int argc, char **argv) {
+    int code = dispatch(argc, argv);
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "sandmpm: writing to the standard output failed: %s\n", strerror(errno));
+        if (code == cli_exit_code(SM_OK)) code = cli_exit_code(SM_ERR_IO);
+    }
+    return code;
 }

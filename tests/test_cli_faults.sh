@@ -11,7 +11,7 @@
 #   - a full disk (SANDMPM_FAULT_WRITE_BYTES, and a 64 KiB tmpfs where mount works): exit 4 with
 #     the file and "No space left on device", no temporary, no file under its final name cut
 #     short, diagnostics.csv and poses.csv whole lines only; an unwritable folder, a file where the
-#     folder or poses.csv should be: exit 4 with the path and the reason;
+#     folder or poses.csv should be: exit 4 with the path and the reason; stdout on a full device;
 #   - huge velocities: the library's message with the frame and the times;
 #   - colliders in `run --render` drawn where they are at each frame (as `render` draws them);
 #   - `render` finds frames past 9999 (frame_10000.ply).
@@ -117,6 +117,7 @@ long=$TMP/long
 while [ ${#long} -lt 4040 ]; do long="$long/$(printf 'c%.0s' $(seq 1 100))"; done
 expect 2 "a path too long for its files" "$BIN" run "$tiny" --frames 1 --out "$long"
 has "$TMP/err" "bytes" "long path: its length named"
+expect 2 "render of a path too long" "$BIN" render "$long"
 [ ! -e "$TMP/long" ] && ok || bad "long path: folders created"
 expect 4 "a name component too long" "$BIN" run "$tiny" --frames 1 --out "$TMP/$(printf 'n%.0s' $(seq 1 300))"
 has "$TMP/err" "File name too long" "long component: the reason kept"
@@ -222,6 +223,13 @@ else
     echo "test_cli: root without setpriv: the unwritable folder is not tested"
 fi
 chmod 700 "$TMP"
+
+# Standard output that cannot be written is an I/O failure too.
+if [ -w /dev/full ]; then
+    expect 4 "info > /dev/full" sh -c '"$0" info "$1" >/dev/full' "$BIN" "$tiny"
+    has "$TMP/err" "No space left on device" "info > /dev/full: the reason"
+    expect 4 "--help > /dev/full" sh -c '"$0" --help >/dev/full' "$BIN"
+fi
 
 # --- Huge velocities: the library's message, with the frame and the times ------------------------
 "$BIN" run "$tiny" --set v=1e300 --frames 2 --out "$TMP/fast" >/dev/null 2>"$TMP/err"

@@ -62,7 +62,7 @@ static int mkdir_prefix(const char *dir, size_t n) {
     return -1;
 }
 
-sm_status sm_make_dirs(const char *dir, char *err, size_t errlen) {
+sm_status sm_check_folder_name(const char *dir, char *err, size_t errlen) {
     const size_t n = strlen(dir);
     if (n == 0) {
         snprintf(err, errlen, "the output folder's name is empty");
@@ -74,6 +74,13 @@ sm_status sm_make_dirs(const char *dir, char *err, size_t errlen) {
                  n, SM_PATH_MAX - SM_NAME_RESERVE, dir);
         return SM_ERR_INVALID;
     }
+    return SM_OK;
+}
+
+sm_status sm_make_dirs(const char *dir, char *err, size_t errlen) {
+    const size_t n = strlen(dir);
+    sm_status named = sm_check_folder_name(dir, err, errlen);
+    if (named != SM_OK) return named;
     for (size_t i = 1; i <= n; i++) {
         if (dir[i] != '/' && dir[i] != 0) continue;
         if (dir[i - 1] == '/') continue; /* "a//b" */

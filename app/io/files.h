@@ -31,9 +31,12 @@
 /* ------------------------------------------------------------------------------------------ */
 /* Folders                                                                                      */
 
+/* SM_OK, or SM_ERR_INVALID if a folder's name is empty or too long for the names of the files
+ * written into it (SM_PATH_MAX - SM_NAME_RESERVE bytes). */
+sm_status sm_check_folder_name(const char *dir, char *err, size_t errlen);
+
 /* Creates dir and its parents as needed (mkdir -p) and checks that it is a folder. SM_OK;
- * SM_ERR_INVALID if the name is empty or too long for the files written into it
- * (SM_PATH_MAX - SM_NAME_RESERVE); SM_ERR_IO naming the part that could not be created. */
+ * SM_ERR_INVALID as sm_check_folder_name; SM_ERR_IO naming the part that could not be created. */
 sm_status sm_make_dirs(const char *dir, char *err, size_t errlen);
 
 /* ------------------------------------------------------------------------------------------ */

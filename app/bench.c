@@ -14,11 +14,9 @@ static double wall(void) {
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static int status_code(sm_status s) { return s == SM_ERR_NOMEM ? 5 : s == SM_ERR_NUMERICAL ? 3 : 2; }
-
 /* The scene: a block of side L resting 3 dx above a sticky ground, L chosen so that
  * (L/dx)^d * ppc is about the target count; the domain leaves room for the collapse. */
-static int build(const sm_bench_case *c, sm_world **out, char *err, size_t errlen) {
+static sm_status build(const sm_bench_case *c, sm_world **out, char *err, size_t errlen) {
     const int dim = c->dim;
     const double ppc = dim == 3 ? 8 : 4;
     const double dx = dim == 3 ? 0.01 : 0.004;
@@ -37,7 +35,7 @@ static int build(const sm_bench_case *c, sm_world **out, char *err, size_t errle
     sm_status s = sm_world_create(&def, &w, cerr, sizeof cerr);
     if (s != SM_OK) {
         snprintf(err, errlen, "%dD world: %s", dim, cerr);
-        return status_code(s);
+        return s;
     }
     sm_material_def m = sm_material_def_sand(); /* hardening 35/9/0.2/10 */
     int mat = -1;
@@ -51,7 +49,7 @@ static int build(const sm_bench_case *c, sm_world **out, char *err, size_t errle
     if (mat < 0 || sm_world_add_collider(w, &g, NULL) != SM_OK) {
         snprintf(err, errlen, "%dD scene: %s", dim, sm_world_errmsg(w));
         sm_world_destroy(w);
-        return 2;
+        return SM_ERR_INVALID;
     }
     sm_shape box = sm_shape_default(SM_SHAPE_BOX);
     for (int a = 0; a < dim; a++) {
@@ -66,43 +64,43 @@ static int build(const sm_bench_case *c, sm_world **out, char *err, size_t errle
     if (s != SM_OK || added == 0) {
         snprintf(err, errlen, "%dD scene: %s", dim, s != SM_OK ? sm_world_errmsg(w) : "no particles seeded");
         sm_world_destroy(w);
-        return s != SM_OK ? status_code(s) : 2;
+        return s != SM_OK ? s : SM_ERR_INVALID;
     }
     *out = w;
-    return 0;
+    return SM_OK;
 }
 
-static int steps(sm_world *w, int n, const char *what, char *err, size_t errlen) {
+static sm_status steps(sm_world *w, int n, const char *what, char *err, size_t errlen) {
     for (int i = 0; i < n; i++) {
         sm_status s = sm_world_step(w, sm_world_next_dt(w, 1e9));
         if (s != SM_OK) {
             snprintf(err, errlen, "%s step %d: %s", what, i + 1, sm_world_errmsg(w));
-            return status_code(s);
+            return s;
         }
     }
-    return 0;
+    return SM_OK;
 }
 
-int sm_bench_run(const sm_bench_case *c, sm_bench_result *r, char *err, size_t errlen) {
+sm_status sm_bench_run(const sm_bench_case *c, sm_bench_result *r, char *err, size_t errlen) {
     memset(r, 0, sizeof *r);
     if ((c->dim != 2 && c->dim != 3) || c->threads < 1 || !(c->particles >= 1) || c->warmup < 0 || c->steps < 1) {
         snprintf(err, errlen, "bad benchmark case (dim %d, threads %d, particles %g, warmup %d, steps %d)", c->dim,
                  c->threads, c->particles, c->warmup, c->steps);
-        return 2;
+        return SM_ERR_INVALID;
     }
     sm_world *w = NULL;
-    int rc = build(c, &w, err, errlen);
-    if (rc) return rc;
+    sm_status rc = build(c, &w, err, errlen);
+    if (rc != SM_OK) return rc;
     /* Warm up into the collapse (sand moving, plasticity active), then measure. */
     rc = steps(w, c->warmup, "warm-up", err, errlen);
     sm_diagnostics d0, d1;
     sm_world_diagnostics(w, &d0);
     uint64_t a0 = sm_allocation_count();
     double t0 = wall();
-    if (!rc) rc = steps(w, c->steps, "measured", err, errlen);
+    if (rc == SM_OK) rc = steps(w, c->steps, "measured", err, errlen);
     double t1 = wall();
     uint64_t a1 = sm_allocation_count();
-    if (rc) {
+    if (rc != SM_OK) {
         sm_world_destroy(w);
         return rc;
     }
@@ -117,7 +115,7 @@ int sm_bench_run(const sm_bench_case *c, sm_bench_result *r, char *err, size_t e
     r->bytes_per_particle = d1.particles ? (double)sm_world_memory_bytes(w) / (double)d1.particles : 0;
     r->allocations_per_step = (double)(a1 - a0) / c->steps;
     sm_world_destroy(w);
-    return 0;
+    return SM_OK;
 }
 
 double sm_bench_rate(const sm_bench_result *r) {
@@ -183,36 +181,36 @@ static int next_num(const char **p, double *v) {
     return 1;
 }
 
-int sm_bench_parse_raw(const char *line, sm_bench_result *r, char *err, size_t errlen) {
+sm_status sm_bench_parse_raw(const char *line, sm_bench_result *r, char *err, size_t errlen) {
     memset(r, 0, sizeof *r);
     int shown = (int)strcspn(line, "\r\n");
     if (shown > 60) shown = 60;
     size_t tl = strlen(RAW_TAG);
     if (strncmp(line, RAW_TAG " ", tl + 1) != 0) {
         snprintf(err, errlen, "not a benchmark result: \"%.*s\"", shown, line);
-        return -1;
+        return SM_ERR_INVALID;
     }
     const char *p = line + tl;
     double v[9];
     for (int i = 0; i < 9; i++)
         if (!next_num(&p, &v[i])) {
             snprintf(err, errlen, "malformed benchmark result: \"%.*s\"", shown, line);
-            return -1;
+            return SM_ERR_INVALID;
         }
     if ((int)v[8] != SM_STAGE_COUNT) {
         snprintf(err, errlen, "benchmark result with %d stages, this program has %d (built from other sources?)",
                  (int)v[8], (int)SM_STAGE_COUNT);
-        return -1;
+        return SM_ERR_INVALID;
     }
     for (int s = 0; s < SM_STAGE_COUNT; s++)
         if (!next_num(&p, &r->stage_seconds[s])) {
             snprintf(err, errlen, "malformed benchmark result: \"%.*s\"", shown, line);
-            return -1;
+            return SM_ERR_INVALID;
         }
     while (*p == ' ' || *p == '\n' || *p == '\r') p++;
     if (*p || (v[0] != 2 && v[0] != 3) || v[1] < 1 || (v[2] != 0 && v[2] != 1) || v[3] < 1 || v[4] < 1) {
         snprintf(err, errlen, "malformed benchmark result: \"%.*s\"", shown, line);
-        return -1;
+        return SM_ERR_INVALID;
     }
     r->dim = (int)v[0];
     r->threads = (int)v[1];
@@ -222,5 +220,5 @@ int sm_bench_parse_raw(const char *line, sm_bench_result *r, char *err, size_t e
     r->seconds = v[5];
     r->bytes_per_particle = v[6];
     r->allocations_per_step = v[7];
-    return 0;
+    return SM_OK;
 }

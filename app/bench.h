@@ -31,8 +31,9 @@ typedef struct sm_bench_result {
     double allocations_per_step;          /* library heap allocations per measured step */
 } sm_bench_result;
 
-/* Runs one case. Returns 0, or 2 (bad case), 3 (a step failed), 5 (out of memory) with a message. */
-int sm_bench_run(const sm_bench_case *c, sm_bench_result *r, char *err, size_t errlen);
+/* Runs one case. Returns SM_OK, or SM_ERR_INVALID (bad case), SM_ERR_NUMERICAL (a step failed),
+ * SM_ERR_NOMEM, with a message. */
+sm_status sm_bench_run(const sm_bench_case *c, sm_bench_result *r, char *err, size_t errlen);
 
 /* Particle-steps per second in total (wall time) and in one stage (0 if the stage took no time). */
 double sm_bench_rate(const sm_bench_result *r);
@@ -52,7 +53,7 @@ void sm_bench_table_row(FILE *f, const sm_bench_result *r);
 /* A lossless one-line form of a result, for passing results between the float and the double
  * program (`sandmpm bench` runs the other precision's program and reads these back). */
 void sm_bench_raw_row(FILE *f, const sm_bench_result *r);
-/* Parses a line written by sm_bench_raw_row. Returns 0, or -1 with a message. */
-int sm_bench_parse_raw(const char *line, sm_bench_result *r, char *err, size_t errlen);
+/* Parses a line written by sm_bench_raw_row. Returns SM_OK, or SM_ERR_INVALID with a message. */
+sm_status sm_bench_parse_raw(const char *line, sm_bench_result *r, char *err, size_t errlen);
 
 #endif

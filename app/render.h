@@ -1,7 +1,8 @@
-/* Preview renderer: particle frames to RGB images and PNG files (libpng).
+/* Preview renderer: particle frames to RGB images (app/render/: camera.c, splat.c, shade.c,
+ * colliders.c, render.c; PNG files through app/io/png.h).
  *
- * A frame (sm_frame) comes from a PLY file (sm_ply_read) or from a world in memory
- * (sm_frame_from_world). sm_render draws it into an 8-bit RGB buffer:
+ * A frame (app/frame.h) comes from a PLY file (app/io/ply.h: sm_ply_read) or from a world in
+ * memory (sm_frame_from_world). sm_render draws it into an 8-bit RGB buffer:
  *   3D: every particle is a sphere impostor (exact per-pixel depth and normal of the sphere,
  *       orthographic approximation per particle) in a z-buffer; a ground plane (checker, lighter
  *       than the sand) over the domain footprint; colliders by sphere tracing their signed distance
@@ -25,47 +26,12 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "app/frame.h"
 #include "sandmpm/sandmpm.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* ------------------------------------------------------------------------------------------ */
-/* Frames                                                                                       */
-
-/* One frame of particles. Arrays are owned by the frame (sm_frame_free). */
-typedef struct sm_frame {
-    size_t n;           /* particles */
-    int dim;            /* 2 or 3 */
-    float *x;           /* positions, 3n (z = 0 in 2D) */
-    float *v;           /* velocities, 3n (zeros if the source has none) */
-    float *q;           /* hardening state, n (zeros if absent) */
-    float *volume;      /* V0, n (m^3; m^2 in 2D), or NULL if the source has no volume */
-    uint16_t *material; /* material id, n (zeros if absent) */
-    uint32_t *id;       /* stable particle ids, n, or NULL (tones then hash the index) */
-    int has_velocity, has_q, has_material;
-    int has_domain;     /* from a "comment domain x0 y0 z0 x1 y1 z1" header line, or the world */
-    double domain_min[3], domain_max[3];
-} sm_frame;
-
-/* Reads a PLY frame. Properties are found by name in the header, in any order, with any extra
- * properties and elements (fixed-size elements before the vertex element are skipped):
- * x y [z] [vx vy vz] [material] [q] [volume] [id], any PLY scalar type; formats
- * binary_little_endian, binary_big_endian and ascii. dim: from a "comment dim 2|3" line, else 2
- * if there is no z property or every z and vz is 0, else 3. Optional "comment domain x0 y0 z0 x1
- * y1 z1" fills has_domain/domain_*.
- * Returns 0; 4 (SM_ERR_IO) if the file cannot be opened or read; 2 (SM_ERR_INVALID) if it is not a
- * PLY file, the header is malformed or unsupported, or the data is truncated; 5 (SM_ERR_NOMEM).
- * On failure *f is empty (n = 0, NULL arrays) and err holds "PATH: problem". */
-int sm_ply_read(const char *path, sm_frame *f, char *err, size_t errlen);
-
-/* Fills a frame from a world's particles (volume from V0, domain from the world's definition).
- * Returns 0 or 5 (out of memory, message in err). */
-int sm_frame_from_world(const sm_world *w, sm_frame *f, char *err, size_t errlen);
-
-/* Frees the arrays and zeroes the frame. Accepts an already-freed or zeroed frame. */
-void sm_frame_free(sm_frame *f);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Rendering                                                                                    */
@@ -128,9 +94,9 @@ typedef struct sm_render_opts {
 sm_render_opts sm_render_opts_default(void);
 
 /* Renders frame f into rgb (width*height*3 bytes, row-major from the top-left). f may have n = 0.
- * Particles with non-finite position or radius are skipped. Returns 0, 2 (invalid options, message
- * naming the field) or 5 (out of memory). */
-int sm_render(const sm_frame *f, const sm_render_opts *o, uint8_t *rgb, char *err, size_t errlen);
+ * Particles with non-finite position or radius are skipped. Returns SM_OK, SM_ERR_INVALID (invalid
+ * options, message naming the field) or SM_ERR_NOMEM. */
+sm_status sm_render(const sm_frame *f, const sm_render_opts *o, uint8_t *rgb, char *err, size_t errlen);
 
 /* The camera sm_render uses when o->has_camera is 0 (fitted to the domain/particle box of frame f,
  * looking from the front-left and above). */
@@ -139,17 +105,10 @@ sm_camera sm_render_fit_camera(const sm_frame *f, const sm_render_opts *o);
 /* The sand tone (sRGB in [0,1]) of the particle with id (or index) `id` for a seed. */
 void sm_render_tone(uint64_t seed, uint64_t id, float rgb[3]);
 
-/* Writes an 8-bit RGB PNG atomically (PATH.tmp, then rename). Returns 0, 4 (I/O, message with the
- * path) or 2 (bad size). */
-int sm_png_write(const char *path, int w, int h, const uint8_t *rgb, char *err, size_t errlen);
-
-/* Reads a PNG as 8-bit RGB (converting palette, grey, 16-bit and alpha). *rgb is malloc'ed.
- * Returns 0, 4 (cannot open) or 2 (not a PNG / corrupt). */
-int sm_png_read(const char *path, int *w, int *h, uint8_t **rgb, char *err, size_t errlen);
-
-/* Convenience: reads a PLY frame, renders it and writes the PNG. Returns 0, 2, 4 or 5 as above. */
-int sm_render_ply_to_png(const char *ply_path, const char *png_path, const sm_render_opts *o, char *err,
-                         size_t errlen);
+/* Convenience: reads a PLY frame, renders it and writes the PNG. Returns SM_OK or the status of
+ * the step that failed (sm_ply_read, sm_render, sm_png_write), with its message. */
+sm_status sm_render_ply_to_png(const char *ply_path, const char *png_path, const sm_render_opts *o, char *err,
+                               size_t errlen);
 
 #ifdef __cplusplus
 }

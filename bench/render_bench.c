@@ -14,6 +14,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "app/io/png.h"
 #include "app/render.h"
 
 static double now(void) {

@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
-# The sandmpm program end to end (run from CTest: test_cli.sh SANDMPM SOURCE_DIR):
-# every shipped scene loads (`info`) and runs a frame at test quality, writing PLY, VTK, PVD, CSV
-# and the render manifest; `info` reports the particles the run actually has; --set reaches the
-# scene; bad input gives exit code 2 with the cause named and leaves no output directory; a
-# missing run directory gives exit code 4; `render` turns a run into PNG files.
+# The sandmpm program end to end (run from CTest: test_cli.sh SANDMPM SOURCE_DIR [PART]).
+# PART basic (CTest test_cli): every shipped scene loads (`info`) and runs a frame at test quality,
+# writing PLY, VTK, PVD, CSV and the render manifest; `info` reports the particles the run actually
+# has; --set reaches the scene; bad input gives exit code 2 with the cause named and leaves no
+# output directory; a missing run directory gives exit code 4; `render` turns a run into PNG
+# files; `bench`.
+# PART faults (CTest test_cli_faults): hostile and careless input and disk trouble, see
+# tests/test_cli_faults.sh. Without PART: both.
 set -u
-BIN=$1
+BIN=$(cd "$(dirname "$1")" && pwd)/$(basename "$1") # absolute: some tests run in other folders
 SRC=$2
+PART=${3:-all}
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 pass=0
@@ -22,6 +26,13 @@ expect() { # expected-code description command...
 has() { # file text description
     if grep -qF -- "$2" "$1"; then ok; else bad "$3: \"$2\" not in: $(head -c 400 "$1")"; fi
 }
+
+if [ "$PART" = faults ]; then
+    . "$SRC/tests/test_cli_faults.sh"
+    echo "test_cli (faults): $pass passed, $fail failed"
+    [ "$fail" -eq 0 ]
+    exit
+fi
 
 for scene in "$SRC"/scenes/*.lua; do
     name=$(basename "$scene" .lua)
@@ -82,9 +93,6 @@ expect 4 "render missing dir" "$BIN" render "$TMP/no_such_run"
 mkdir -p "$TMP/corrupt" && printf 'ply\nformat binary_little_endian 1.0\nelement vertex 100\nproperty float x\nend_header\n' > "$TMP/corrupt/frame_0000.ply"
 expect 2 "render corrupt frame" "$BIN" render "$TMP/corrupt"
 
-echo "test_cli: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
-
 # bench: `sandmpm bench --csv` in this build's precision and, if the program of the other
 # precision (sandmpm-float / sandmpm-double, CMake SM_SIBLING) is next to this one, in that one
 # too: the exact header, one row per dimension and thread count, sane fields. No timing checks.
@@ -122,5 +130,6 @@ has "$TMP/err" "note:" "bench notes the missing sibling"
 expect 2 "bench without sibling, --precision $other" "$TMP/solo/sandmpm" bench --csv --particles 500 --steps 1 --precision "$other"
 has "$TMP/err" "$other" "bench names the missing precision"
 
-echo "test_cli (with bench): $pass passed, $fail failed"
+[ "$PART" = all ] && . "$SRC/tests/test_cli_faults.sh"
+echo "test_cli ($PART): $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -2,10 +2,14 @@
  * (header and every property of every particle) and VTK XML PolyData (every appended array, the
  * vertex cells), in 2D and 3D, after some steps so that velocities, F and q are not trivial. The
  * write is atomic: no temporary file is left behind. */
+#define _POSIX_C_SOURCE 200809L
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
-#include "app/output.h"
+#include "app/io/files.h"
+#include "app/io/ply.h"
+#include "app/io/vtk.h"
 #include "test_util.h"
 
 static unsigned char *slurp(const char *path, size_t *len) {
@@ -84,10 +88,10 @@ int main(void) {
         char err[512];
         const char *ply = dim == 2 ? "test_output_2d.ply" : "test_output_3d.ply";
         const char *vtp = dim == 2 ? "test_output_2d.vtp" : "test_output_3d.vtp";
-        CHECK(sm_write_ply(w, ply, err, sizeof err) == 0);
-        CHECK(sm_write_vtp(w, vtp, err, sizeof err) == 0);
+        CHECK(sm_write_ply(w, ply, err, sizeof err) == SM_OK);
+        CHECK(sm_write_vtp(w, vtp, err, sizeof err) == SM_OK);
         char tmpname[256];
-        snprintf(tmpname, sizeof tmpname, "%s.tmp", ply);
+        CHECK(sm_temp_name(tmpname, sizeof tmpname, ply, (long)getpid()) == 0);
         FILE *t = fopen(tmpname, "rb");
         CHECK(t == NULL);
         if (t) fclose(t);
@@ -186,12 +190,13 @@ int main(void) {
         /* A .pvd collection lists the files with times. */
         const char *files[2] = {"a.vtp", "b.vtp"};
         const double times[2] = {0, 0.5};
-        CHECK(sm_write_pvd("test_output.pvd", files, times, 2, err, sizeof err) == 0);
+        CHECK(sm_write_pvd("test_output.pvd", files, times, 2, err, sizeof err) == SM_OK);
         b = slurp("test_output.pvd", &len);
         CHECK(b && strstr((char *)b, "timestep=\"0.5\"") && strstr((char *)b, "file=\"b.vtp\""));
         free(b);
         /* Unwritable path: an error message, no crash. */
-        CHECK(sm_write_ply(w, "/nonexistent-dir/x.ply", err, sizeof err) == -1);
+        CHECK(sm_write_ply(w, "/nonexistent-dir/x.ply", err, sizeof err) == SM_ERR_IO);
+        CHECK(strstr(err, "No such file or directory") != NULL); /* the reason */
         CHECK(strstr(err, "/nonexistent-dir/x.ply") != NULL);
         printf("%dD: %zu particles written and read back (PLY %zu bytes per particle)\n", dim, pv.n, rec);
         sm_world_destroy(w);

@@ -20,7 +20,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "app/output.h"
+#include "app/io/files.h"
+#include "app/io/ply.h"
+#include "app/io/png.h"
 #include "app/render.h"
 #include "test_util.h"
 
@@ -174,10 +176,10 @@ static double foreground_fraction(const uint8_t *img, const uint8_t *bg, int w, 
     return (double)c / (double)n;
 }
 
-static int render(const sm_frame *f, const sm_render_opts *o, uint8_t *img) {
+static sm_status render(const sm_frame *f, const sm_render_opts *o, uint8_t *img) {
     char err[256];
-    int rc = sm_render(f, o, img, err, sizeof err);
-    if (rc) fprintf(stderr, "render: %s\n", err);
+    sm_status rc = sm_render(f, o, img, err, sizeof err);
+    if (rc != SM_OK) fprintf(stderr, "render: %s\n", err);
     return rc;
 }
 
@@ -193,7 +195,7 @@ static void test_scene(void) {
     empty.dim = 3;
     sm_render_opts ob = o;
     ob.ground = SM_GROUND_NONE;
-    CHECK(render(&empty, &ob, bg) == 0);
+    CHECK(render(&empty, &ob, bg) == SM_OK);
     /* the background is a vertical gradient: rows differ, columns do not */
     CHECK(memcmp(bg, bg + 3 * (W - 1), 3) == 0);
     CHECK(memcmp(bg, bg + 3 * (size_t)W * (H - 1), 3) != 0);
@@ -205,7 +207,7 @@ static void test_scene(void) {
     const double glo[3] = {-0.55, -1e-9, -0.55}, ghi[3] = {0.55, 1e-9, 0.55};
 
     /* cube alone */
-    CHECK(render(&f, &ob, img) == 0);
+    CHECK(render(&f, &ob, img) == SM_OK);
     size_t expect_cube = 0;
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) expect_cube += ray_hits_box(&cam, x, y, clo, chi);
@@ -215,7 +217,7 @@ static void test_scene(void) {
     CHECK_REL(fc, ec, 0.10, 0.0);
 
     /* cube and ground */
-    CHECK(render(&f, &o, img) == 0);
+    CHECK(render(&f, &o, img) == SM_OK);
     size_t expect = 0;
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) expect += ray_hits_box(&cam, x, y, clo, chi) || ray_hits_box(&cam, x, y, glo, ghi);
@@ -240,7 +242,7 @@ static void test_scene(void) {
     /* without shadows the same spot is lit */
     sm_render_opts ons = o;
     ons.shadows = 0;
-    CHECK(render(&f, &ons, img2) == 0);
+    CHECK(render(&f, &ons, img2) == SM_OK);
     CHECK_REL(mean_bright(img2, sx, sy), b1, 0.02, 1);
 
     /* the cube's top is sand-brown: r > g > b */
@@ -254,14 +256,14 @@ static void test_scene(void) {
     for (int t = 2; t <= 3; t++) {
         sm_render_opts ot = o;
         ot.threads = t;
-        CHECK(render(&f, &ot, img2) == 0);
+        CHECK(render(&f, &ot, img2) == SM_OK);
         CHECK(memcmp(img, img2, W * H * 3) == 0);
     }
-    CHECK(render(&f, &o, img2) == 0);
+    CHECK(render(&f, &o, img2) == SM_OK);
     CHECK(memcmp(img, img2, W * H * 3) == 0);
     sm_render_opts o0 = o;
     o0.threads = 0; /* OpenMP's default */
-    CHECK(render(&f, &o0, img2) == 0);
+    CHECK(render(&f, &o0, img2) == SM_OK);
     CHECK(memcmp(img, img2, W * H * 3) == 0);
 
     /* the image size: a non-square size renders, and writes exactly width*height*3 bytes */
@@ -271,7 +273,7 @@ static void test_scene(void) {
         os.height = 31;
         uint8_t *small = malloc(97 * 31 * 3 + 16);
         memset(small, 0xAB, 97 * 31 * 3 + 16);
-        CHECK(sm_render(&f, &os, small, err, sizeof err) == 0);
+        CHECK(sm_render(&f, &os, small, err, sizeof err) == SM_OK);
         int tail_ok = 1;
         for (int i = 0; i < 16; i++) tail_ok &= small[97 * 31 * 3 + i] == 0xAB;
         CHECK(tail_ok);
@@ -281,19 +283,19 @@ static void test_scene(void) {
     /* PNG round trip */
     char path[512];
     tmp_path(path, sizeof path, "scene.png");
-    CHECK(sm_png_write(path, W, H, img, err, sizeof err) == 0);
+    CHECK(sm_png_write(path, W, H, img, err, sizeof err) == SM_OK);
     int rw = 0, rh = 0;
     uint8_t *back = NULL;
-    CHECK(sm_png_read(path, &rw, &rh, &back, err, sizeof err) == 0);
+    CHECK(sm_png_read(path, &rw, &rh, &back, err, sizeof err) == SM_OK);
     CHECK(rw == W && rh == H);
     CHECK(back && memcmp(back, img, W * H * 3) == 0);
     free(back);
     char tmpname[600];
-    snprintf(tmpname, sizeof tmpname, "%s.tmp", path);
+    CHECK(sm_temp_name(tmpname, sizeof tmpname, path, (long)getpid()) == 0);
     CHECK(access(tmpname, F_OK) != 0); /* atomic: no temporary left */
-    CHECK(sm_png_write("/nonexistent-dir/x.png", W, H, img, err, sizeof err) == 4);
+    CHECK(sm_png_write("/nonexistent-dir/x.png", W, H, img, err, sizeof err) == SM_ERR_IO);
     CHECK_MSG(err, "/nonexistent-dir/x.png");
-    CHECK(sm_png_read("/nonexistent-dir/x.png", &rw, &rh, &back, err, sizeof err) == 4);
+    CHECK(sm_png_read("/nonexistent-dir/x.png", &rw, &rh, &back, err, sizeof err) == SM_ERR_IO);
     /* a PLY is not a PNG */
     {
         char p2[512];
@@ -301,7 +303,7 @@ static void test_scene(void) {
         FILE *fp = fopen(p2, "wb");
         fputs("ply\nformat ascii 1.0\n", fp);
         fclose(fp);
-        CHECK(sm_png_read(p2, &rw, &rh, &back, err, sizeof err) == 2);
+        CHECK(sm_png_read(p2, &rw, &rh, &back, err, sizeof err) == SM_ERR_INVALID);
         /* a truncated PNG */
         FILE *in = fopen(path, "rb");
         unsigned char buf[300];
@@ -310,7 +312,7 @@ static void test_scene(void) {
         fp = fopen(p2, "wb");
         fwrite(buf, 1, got, fp);
         fclose(fp);
-        CHECK(sm_png_read(p2, &rw, &rh, &back, err, sizeof err) == 2);
+        CHECK(sm_png_read(p2, &rw, &rh, &back, err, sizeof err) == SM_ERR_INVALID);
         CHECK(back == NULL);
     }
 
@@ -318,17 +320,17 @@ static void test_scene(void) {
     for (size_t i = 0; i < f.n; i++) f.material[i] = 1;
     sm_render_opts om = o;
     om.color = SM_COLOR_MATERIAL;
-    CHECK(render(&f, &om, img2) == 0);
+    CHECK(render(&f, &om, img2) == SM_OK);
     pt = img2 + 3 * ((size_t)ty * W + (size_t)tx);
     CHECK(pt[2] > pt[0]);
     om.color = SM_COLOR_SPEED;
-    CHECK(render(&f, &om, img2) == 0);
+    CHECK(render(&f, &om, img2) == SM_OK);
     CHECK(memcmp(img, img2, W * H * 3) != 0);
     om.color_range[0] = 0;
     om.color_range[1] = 10;
-    CHECK(render(&f, &om, img2) == 0);
+    CHECK(render(&f, &om, img2) == SM_OK);
     om.color = SM_COLOR_Q;
-    CHECK(render(&f, &om, img2) == 0);
+    CHECK(render(&f, &om, img2) == SM_OK);
     CHECK(memcmp(img, img2, W * H * 3) != 0);
 
     /* tones: a function of (seed, id) only, brown (r > g > b), vary with the seed */
@@ -356,8 +358,8 @@ static void test_scene(void) {
             g.id[j] = (uint32_t)i;
             memcpy(g.x + 3 * j, f.x + 3 * i, 3 * sizeof(float));
         }
-        CHECK(render(&f, &o, img) == 0);
-        CHECK(render(&g, &o, img2) == 0);
+        CHECK(render(&f, &o, img) == SM_OK);
+        CHECK(render(&g, &o, img2) == SM_OK);
         size_t diff = 0;
         for (size_t i = 0; i < (size_t)W * H; i++) diff += memcmp(img + 3 * i, img2 + 3 * i, 3) != 0;
         printf("permuted frame with ids: %zu of %d pixels differ\n", diff, W * H);
@@ -368,22 +370,22 @@ static void test_scene(void) {
     /* invalid options */
     sm_render_opts bad = o;
     bad.width = 0;
-    CHECK(sm_render(&f, &bad, img, err, sizeof err) == 2);
+    CHECK(sm_render(&f, &bad, img, err, sizeof err) == SM_ERR_INVALID);
     CHECK_MSG(err, "width");
     bad = o;
     bad.ambient = 2;
-    CHECK(sm_render(&f, &bad, img, err, sizeof err) == 2);
+    CHECK(sm_render(&f, &bad, img, err, sizeof err) == SM_ERR_INVALID);
     CHECK_MSG(err, "ambient");
     bad = o;
     sm_collider_def c0 = sm_collider_def_default();
     bad.colliders = &c0;
     bad.ncolliders = 1; /* shape_count 0 */
-    CHECK(sm_render(&f, &bad, img, err, sizeof err) == 2);
+    CHECK(sm_render(&f, &bad, img, err, sizeof err) == SM_ERR_INVALID);
     CHECK_MSG(err, "colliders[0].shape_count");
     bad = o;
     bad.camera.target[1] = bad.camera.eye[1];
     bad.camera.target[2] = bad.camera.eye[2];
-    CHECK(sm_render(&f, &bad, img, err, sizeof err) == 2);
+    CHECK(sm_render(&f, &bad, img, err, sizeof err) == SM_ERR_INVALID);
     CHECK_MSG(err, "camera");
 
     /* non-finite particles are skipped, a fitted camera and the auto ground work */
@@ -393,7 +395,7 @@ static void test_scene(void) {
     sm_render_opts oa = o;
     oa.has_camera = 0;
     oa.ground = SM_GROUND_AUTO;
-    CHECK(render(&f, &oa, img) == 0);
+    CHECK(render(&f, &oa, img) == SM_OK);
     double fa = foreground_fraction(img, bg, W, H);
     CHECK(fa > 0.1 && fa < 0.95);
     sm_camera fit = sm_render_fit_camera(&f, &oa);
@@ -403,8 +405,8 @@ static void test_scene(void) {
     f.volume = NULL;
     sm_render_opts orad = o;
     orad.radius = cbrt(3e-6 / (4 * PI_T));
-    CHECK(render(&f, &orad, img) == 0);
-    CHECK(render(&f, &o, img2) == 0);
+    CHECK(render(&f, &orad, img) == SM_OK);
+    CHECK(render(&f, &o, img2) == SM_OK);
     double fr = foreground_fraction(img, bg, W, H), fe = foreground_fraction(img2, bg, W, H);
     printf("no volumes: radius option %.4f, estimated radius %.4f\n", fr, fe);
     CHECK_NEAR(fr, eg, 0.02);
@@ -441,7 +443,7 @@ static void test_colliders(void) {
     c[1].shapes[0].half_extent[1] = 0.3;
     o.colliders = c;
     o.ncolliders = 1;
-    CHECK(render(&f, &o, img) == 0);
+    CHECK(render(&f, &o, img) == SM_OK);
     int x, y;
     const double ctr[3] = {0.3, 0.15, 0};
     project(&cam, ctr, &x, &y);
@@ -462,7 +464,7 @@ static void test_colliders(void) {
     cr.pose.rotation[0] = cos(PI_T / 4);      /* ... turned 90 degrees about y: world (0, 0.15, -0.3) */
     cr.pose.rotation[2] = sin(PI_T / 4);
     o.colliders = &cr;
-    CHECK(render(&f, &o, img2) == 0);
+    CHECK(render(&f, &o, img2) == SM_OK);
     const double ctr2[3] = {0, 0.15, -0.3};
     project(&cam, ctr2, &x, &y);
     p = img2 + 3 * ((size_t)y * W + (size_t)x);
@@ -471,7 +473,7 @@ static void test_colliders(void) {
     /* container: the sand inside stays visible, and so does its floor */
     o.colliders = &c[1];
     o.ncolliders = 1;
-    CHECK(render(&f, &o, img2) == 0);
+    CHECK(render(&f, &o, img2) == SM_OK);
     const double top[3] = {0, 0.2, 0};
     project(&cam, top, &x, &y);
     p = img2 + 3 * ((size_t)y * W + (size_t)x);
@@ -483,9 +485,9 @@ static void test_colliders(void) {
     /* deterministic with colliders too */
     o.colliders = c;
     o.ncolliders = 2;
-    CHECK(render(&f, &o, img) == 0);
+    CHECK(render(&f, &o, img) == SM_OK);
     o.threads = 2;
-    CHECK(render(&f, &o, img2) == 0);
+    CHECK(render(&f, &o, img2) == SM_OK);
     CHECK(memcmp(img, img2, W * H * 3) == 0);
     sm_frame_free(&f);
     free(img);
@@ -520,8 +522,8 @@ static void test_2d(void) {
     uint8_t *img = malloc(W * H * 3), *bg = malloc(W * H * 3), *img2 = malloc(W * H * 3);
     sm_frame empty = f;
     empty.n = 0;
-    CHECK(render(&empty, &o, bg) == 0);
-    CHECK(render(&f, &o, img) == 0);
+    CHECK(render(&empty, &o, bg) == SM_OK);
+    CHECK(render(&f, &o, img) == SM_OK);
     /* view: the domain grown by 5% (1.1 x 0.55 m) fitted to 4:3 -> 0.825 m high */
     const double px = H / 0.825;
     double expect = 10 * PI_T * (r * px) * (r * px) / (W * H);
@@ -529,7 +531,7 @@ static void test_2d(void) {
     printf("2D disks: non-background %.5f, expected %.5f\n", got, expect);
     CHECK_REL(got, expect, 0.08, 0);
     o.threads = 2;
-    CHECK(render(&f, &o, img2) == 0);
+    CHECK(render(&f, &o, img2) == SM_OK);
     CHECK(memcmp(img, img2, W * H * 3) == 0);
     /* the ground and a container */
     sm_collider_def c = sm_collider_def_default();
@@ -543,7 +545,7 @@ static void test_2d(void) {
     o.colliders = &c;
     o.ncolliders = 1;
     o.ground = SM_GROUND_AUTO;
-    CHECK(render(&f, &o, img2) == 0);
+    CHECK(render(&f, &o, img2) == SM_OK);
     double g2 = foreground_fraction(img2, bg, W, H);
     CHECK(g2 > got + 0.02 && g2 < 0.6); /* walls and ground added, the inside stays free */
     sm_frame_free(&f);
@@ -609,9 +611,9 @@ static void test_ply_roundtrip(int dim) {
     if (!w) return;
     char path[512], err[512];
     tmp_path(path, sizeof path, dim == 3 ? "rt3.ply" : "rt2.ply");
-    CHECK(sm_write_ply(w, path, err, sizeof err) == 0);
+    CHECK(sm_write_ply(w, path, err, sizeof err) == SM_OK);
     sm_frame f;
-    CHECK(sm_ply_read(path, &f, err, sizeof err) == 0);
+    CHECK(sm_ply_read(path, &f, err, sizeof err) == SM_OK);
     sm_particles_view pv;
     sm_world_particles(w, &pv);
     CHECK(f.n == pv.n && pv.n > 100);
@@ -641,7 +643,7 @@ static void test_ply_roundtrip(int dim) {
     }
     /* and from the world directly */
     sm_frame g;
-    CHECK(sm_frame_from_world(w, &g, err, sizeof err) == 0);
+    CHECK(sm_frame_from_world(w, &g, err, sizeof err) == SM_OK);
     CHECK(g.n == f.n && g.dim == dim && g.has_domain);
     CHECK(g.n > 0 && memcmp(g.x, f.x, 3 * f.n * sizeof(float)) == 0);
     CHECK(g.n > 0 && memcmp(g.volume, f.volume, f.n * sizeof(float)) == 0);
@@ -650,10 +652,10 @@ static void test_ply_roundtrip(int dim) {
     o.width = 64;
     o.height = 48;
     uint8_t img[64 * 48 * 3];
-    CHECK(sm_render(&f, &o, img, err, sizeof err) == 0);
+    CHECK(sm_render(&f, &o, img, err, sizeof err) == SM_OK);
     char png[512];
     tmp_path(png, sizeof png, "rt.png");
-    CHECK(sm_render_ply_to_png(path, png, &o, err, sizeof err) == 0);
+    CHECK(sm_render_ply_to_png(path, png, &o, err, sizeof err) == SM_OK);
     /* truncated: the header and half the data */
     FILE *fp = fopen(path, "rb");
     fseek(fp, 0, SEEK_END);
@@ -666,17 +668,17 @@ static void test_ply_roundtrip(int dim) {
     tmp_path(tpath, sizeof tpath, "trunc.ply");
     write_file(tpath, buf, (size_t)len / 2);
     sm_frame t;
-    CHECK(sm_ply_read(tpath, &t, err, sizeof err) == 2);
+    CHECK(sm_ply_read(tpath, &t, err, sizeof err) == SM_ERR_INVALID);
     CHECK_MSG(err, tpath);
     CHECK_MSG(err, "truncated");
     CHECK(t.n == 0 && t.x == NULL);
-    CHECK(sm_render_ply_to_png(tpath, png, &o, err, sizeof err) == 2);
+    CHECK(sm_render_ply_to_png(tpath, png, &o, err, sizeof err) == SM_ERR_INVALID);
     /* one byte short */
     write_file(tpath, buf, (size_t)len - 1);
-    CHECK(sm_ply_read(tpath, &t, err, sizeof err) == 2);
+    CHECK(sm_ply_read(tpath, &t, err, sizeof err) == SM_ERR_INVALID);
     /* header cut in the middle */
     write_file(tpath, buf, 60);
-    CHECK(sm_ply_read(tpath, &t, err, sizeof err) == 2);
+    CHECK(sm_ply_read(tpath, &t, err, sizeof err) == SM_ERR_INVALID);
     CHECK_MSG(err, "end_header");
     free(buf);
     sm_frame_free(&f);
@@ -705,7 +707,7 @@ static void test_ply_formats(void) {
                     "3e-6 7 10 8 65535 9 1.5\n"
                     "3 0 1 2\n";
     write_file(path, a, strlen(a));
-    CHECK(sm_ply_read(path, &f, err, sizeof err) == 0);
+    CHECK(sm_ply_read(path, &f, err, sizeof err) == SM_OK);
     if (f.n == 3) {
         CHECK(f.x[0] == 0.125f && f.x[1] == 0.25f && f.x[2] == 0.5f);
         CHECK(f.x[6] == 9.0f && f.x[7] == 8.0f && f.x[8] == 7.0f);
@@ -738,7 +740,7 @@ static void test_ply_formats(void) {
     p[36] = p[37] = p[38] = 0;
     p[39] = 9;
     write_file(path, data, hl + 40);
-    CHECK(sm_ply_read(path, &f, err, sizeof err) == 0);
+    CHECK(sm_ply_read(path, &f, err, sizeof err) == SM_OK);
     CHECK(f.n == 2 && f.dim == 2);
     if (f.n == 2) {
         CHECK(f.x[0] == 1.5f && f.x[1] == -2.25f && f.x[2] == 0 && f.x[3] == 3.0f);
@@ -750,19 +752,19 @@ static void test_ply_formats(void) {
     o.width = 32;
     o.height = 24;
     uint8_t img[32 * 24 * 3];
-    CHECK(sm_render(&f, &o, img, err, sizeof err) == 0);
+    CHECK(sm_render(&f, &o, img, err, sizeof err) == SM_OK);
     o.radius = 0.1;
-    CHECK(sm_render(&f, &o, img, err, sizeof err) == 0);
+    CHECK(sm_render(&f, &o, img, err, sizeof err) == SM_OK);
     sm_frame_free(&f);
     /* "comment dim 2" wins, an empty vertex element reads as an empty frame */
     tmp_path(path, sizeof path, "empty.ply");
     const char *e = "ply\nformat binary_little_endian 1.0\ncomment dim 2\nelement vertex 0\nproperty float x\n"
                     "property float y\nproperty float z\nend_header\n";
     write_file(path, e, strlen(e));
-    CHECK(sm_ply_read(path, &f, err, sizeof err) == 0);
+    CHECK(sm_ply_read(path, &f, err, sizeof err) == SM_OK);
     CHECK(f.n == 0 && f.dim == 2);
     o.radius = 0;
-    CHECK(sm_render(&f, &o, img, err, sizeof err) == 0);
+    CHECK(sm_render(&f, &o, img, err, sizeof err) == SM_OK);
     sm_frame_free(&f);
 }
 
@@ -771,13 +773,13 @@ static void test_ply_errors(void) {
     sm_frame f;
     /* missing */
     tmp_path(path, sizeof path, "does_not_exist.ply");
-    CHECK(sm_ply_read(path, &f, err, sizeof err) == 4);
+    CHECK(sm_ply_read(path, &f, err, sizeof err) == SM_ERR_IO);
     CHECK_MSG(err, path);
     CHECK(f.n == 0 && f.x == NULL);
     /* a directory */
-    CHECK(sm_ply_read(tmpdir, &f, err, sizeof err) == 4);
+    CHECK(sm_ply_read(tmpdir, &f, err, sizeof err) == SM_ERR_IO);
     /* NULL err is allowed */
-    CHECK(sm_ply_read(path, &f, NULL, 0) == 4);
+    CHECK(sm_ply_read(path, &f, NULL, 0) == SM_ERR_IO);
     struct {
         const char *name, *text, *msg;
     } cases[] = {
@@ -810,9 +812,9 @@ static void test_ply_errors(void) {
         tmp_path(path, sizeof path, cases[i].name);
         write_file(path, cases[i].text, strlen(cases[i].text));
         err[0] = 0;
-        int rc = sm_ply_read(path, &f, err, sizeof err);
-        if (rc != 2) fprintf(stderr, "%s: rc %d (%s)\n", cases[i].name, rc, err);
-        CHECK(rc == 2);
+        sm_status rc = sm_ply_read(path, &f, err, sizeof err);
+        if (rc != SM_ERR_INVALID) fprintf(stderr, "%s: rc %d (%s)\n", cases[i].name, (int)rc, err);
+        CHECK(rc == SM_ERR_INVALID);
         CHECK_MSG(err, path);
         CHECK_MSG(err, cases[i].msg);
         CHECK(f.n == 0 && f.x == NULL);
@@ -829,15 +831,15 @@ static void test_ply_errors(void) {
         if (trial % 2) memcpy(buf + hl, "end_header\n", n - hl < 11 ? n - hl : 11);
         tmp_path(path, sizeof path, "fuzz.ply");
         write_file(path, buf, n);
-        int rc = sm_ply_read(path, &f, err, sizeof err);
-        CHECK(rc == 0 || rc == 2);
-        if (rc == 0) { /* whatever garbage it holds renders without crashing */
+        sm_status rc = sm_ply_read(path, &f, err, sizeof err);
+        CHECK(rc == SM_OK || rc == SM_ERR_INVALID);
+        if (rc == SM_OK) { /* whatever garbage it holds renders without crashing */
             sm_render_opts o = sm_render_opts_default();
             o.width = 32;
             o.height = 24;
             o.threads = 1;
             uint8_t img[32 * 24 * 3];
-            CHECK(sm_render(&f, &o, img, err, sizeof err) == 0);
+            CHECK(sm_render(&f, &o, img, err, sizeof err) == SM_OK);
         }
         sm_frame_free(&f);
     }

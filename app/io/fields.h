@@ -1,0 +1,23 @@
+/* The per-particle fields the frame writers (PLY, VTK) write, in float: one place that says what
+ * a frame file holds for a particle, so that the formats cannot disagree. */
+#ifndef SM_APP_IO_FIELDS_H
+#define SM_APP_IO_FIELDS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sandmpm/sandmpm.h"
+
+typedef struct sm_out_particle {
+    float x[3], v[3];     /* position (m) and velocity (m/s); z = 0 in 2D */
+    uint16_t material;    /* material id */
+    float q;              /* hardening state */
+    float friction_angle; /* degrees, from q through the material's hardening */
+    float Je;             /* det F^E */
+    float volume;         /* V0, m^3 (m^2 in 2D) */
+} sm_out_particle;
+
+/* The fields of particle i of the view pv of world w. */
+void sm_out_particle_get(const sm_world *w, const sm_particles_view *pv, size_t i, sm_out_particle *r);
+
+#endif

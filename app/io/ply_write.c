@@ -1,0 +1,57 @@
+/* The PLY frame writer; see ply.h. */
+#include <stdint.h>
+#include <string.h>
+
+#include "app/io/files.h"
+#include "app/io/fields.h"
+#include "app/io/ply.h"
+
+static void put_f32(unsigned char *b, float f) {
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    b[0] = (unsigned char)(u & 0xff);
+    b[1] = (unsigned char)((u >> 8) & 0xff);
+    b[2] = (unsigned char)((u >> 16) & 0xff);
+    b[3] = (unsigned char)((u >> 24) & 0xff);
+}
+
+/* One vertex record, little-endian, in the header's property order. */
+#define PLY_RECORD_BYTES (4 * 6 + 2 + 4 * 4)
+static void put_record(unsigned char *rec, const sm_out_particle *r) {
+    for (int a = 0; a < 3; a++) {
+        put_f32(rec + 4 * a, r->x[a]);
+        put_f32(rec + 12 + 4 * a, r->v[a]);
+    }
+    rec[24] = (unsigned char)(r->material & 0xff);
+    rec[25] = (unsigned char)(r->material >> 8);
+    put_f32(rec + 26, r->q);
+    put_f32(rec + 30, r->friction_angle);
+    put_f32(rec + 34, r->Je);
+    put_f32(rec + 38, r->volume);
+}
+
+sm_status sm_write_ply(const sm_world *w, const char *path, char *err, size_t errlen) {
+    sm_atomic_file a;
+    sm_status st = sm_atomic_open(&a, path, err, errlen);
+    if (st != SM_OK) return st;
+    sm_particles_view pv;
+    sm_world_particles(w, &pv);
+    const sm_world_def *def = sm_world_get_def(w);
+    fprintf(a.f,
+            "ply\nformat binary_little_endian 1.0\ncomment sandmpm %s\ncomment dim %d\n"
+            "comment domain %.9g %.9g %.9g %.9g %.9g %.9g\nelement vertex %zu\n"
+            "property float x\nproperty float y\nproperty float z\n"
+            "property float vx\nproperty float vy\nproperty float vz\n"
+            "property ushort material\nproperty float q\nproperty float friction_angle\nproperty float Je\n"
+            "property float volume\nend_header\n",
+            sm_version(), pv.dim, def->domain_min[0], def->domain_min[1], def->domain_min[2], def->domain_max[0],
+            def->domain_max[1], def->domain_max[2], pv.n);
+    unsigned char rec[PLY_RECORD_BYTES];
+    for (size_t i = 0; i < pv.n && !ferror(a.f); i++) {
+        sm_out_particle r;
+        sm_out_particle_get(w, &pv, i, &r);
+        put_record(rec, &r);
+        fwrite(rec, sizeof rec, 1, a.f);
+    }
+    return sm_atomic_commit(&a, err, errlen);
+}

@@ -1,0 +1,21 @@
+/* VTK frames for ParaView: one XML PolyData file (.vtp) per frame and a collection (.pvd) that
+ * lists them with their times. */
+#ifndef SM_APP_IO_VTK_H
+#define SM_APP_IO_VTK_H
+
+#include <stddef.h>
+
+#include "sandmpm/sandmpm.h"
+
+/* Writes the particles as VTK XML PolyData (.vtp, raw appended little-endian, UInt64 headers),
+ * atomically: points, a vertex cell per particle, and point arrays velocity, material, q,
+ * friction_angle, Je, volume in that order in the appended block (then Points, connectivity,
+ * offsets). Returns SM_OK, SM_ERR_NOMEM or SM_ERR_IO, with a message in err. */
+sm_status sm_write_vtp(const sm_world *w, const char *path, char *err, size_t errlen);
+
+/* Writes a ParaView collection (.pvd) atomically, listing count files (relative names) with their
+ * times. SM_OK or SM_ERR_IO with a message. */
+sm_status sm_write_pvd(const char *path, const char *const *files, const double *times, int count, char *err,
+                       size_t errlen);
+
+#endif

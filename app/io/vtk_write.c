@@ -1,0 +1,127 @@
+/* VTK XML writers; see vtk.h. Raw appended data: after "_", each array is a UInt64 byte count and
+ * the bytes; the XML header names each array with its offset into that block. A vertex cell per
+ * particle, so that every VTK reader shows the points. */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "app/io/files.h"
+#include "app/io/fields.h"
+#include "app/io/vtk.h"
+
+/* The arrays of a frame, in float (and Int64 cells), gathered before writing. */
+typedef struct vtp_arrays {
+    float *xyz, *vel, *q, *phi, *je, *vol;
+    int64_t *conn, *offs;
+} vtp_arrays;
+
+static void arrays_free(vtp_arrays *a) {
+    free(a->xyz);
+    free(a->vel);
+    free(a->q);
+    free(a->phi);
+    free(a->je);
+    free(a->vol);
+    free(a->conn);
+    free(a->offs);
+}
+
+static int arrays_fill(vtp_arrays *a, const sm_world *w, const sm_particles_view *pv) {
+    const size_t n = pv->n, m = n ? n : 1;
+    a->xyz = malloc(m * 3 * sizeof(float));
+    a->vel = malloc(m * 3 * sizeof(float));
+    a->q = malloc(m * sizeof(float));
+    a->phi = malloc(m * sizeof(float));
+    a->je = malloc(m * sizeof(float));
+    a->vol = malloc(m * sizeof(float));
+    a->conn = malloc(m * sizeof(int64_t));
+    a->offs = malloc(m * sizeof(int64_t));
+    if (!a->xyz || !a->vel || !a->q || !a->phi || !a->je || !a->vol || !a->conn || !a->offs) return 0;
+    for (size_t i = 0; i < n; i++) {
+        sm_out_particle r;
+        sm_out_particle_get(w, pv, i, &r);
+        memcpy(a->xyz + 3 * i, r.x, sizeof r.x);
+        memcpy(a->vel + 3 * i, r.v, sizeof r.v);
+        a->q[i] = r.q;
+        a->phi[i] = r.friction_angle;
+        a->je[i] = r.Je;
+        a->vol[i] = r.volume;
+        a->conn[i] = (int64_t)i;
+        a->offs[i] = (int64_t)i + 1;
+    }
+    return 1;
+}
+
+static void write_block(FILE *f, const void *data, uint64_t bytes) {
+    fwrite(&bytes, sizeof bytes, 1, f);
+    if (bytes) fwrite(data, 1, (size_t)bytes, f);
+}
+
+/* One appended DataArray's XML line; *off moves past its block (8-byte header + bytes). */
+static void array_line(FILE *f, const char *type, const char *name, int comps, uint64_t *off, uint64_t bytes) {
+    fprintf(f, "<DataArray type=\"%s\" Name=\"%s\"%s format=\"appended\" offset=\"%llu\"/>\n", type, name,
+            comps == 3 ? " NumberOfComponents=\"3\"" : "", (unsigned long long)*off);
+    *off += 8 + bytes;
+}
+
+static void write_vtp(FILE *f, const vtp_arrays *a, const uint16_t *material, size_t n) {
+    const uint64_t b3 = 12 * (uint64_t)n, b1 = 4 * (uint64_t)n, b2 = 2 * (uint64_t)n, b8 = 8 * (uint64_t)n;
+    uint64_t off = 0;
+    fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+               "header_type=\"UInt64\">\n<PolyData>\n<Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"%zu\" NumberOfLines=\"0\" "
+               "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n<PointData Scalars=\"q\" Vectors=\"velocity\">\n", n, n);
+    array_line(f, "Float32", "velocity", 3, &off, b3);
+    array_line(f, "UInt16", "material", 1, &off, b2);
+    array_line(f, "Float32", "q", 1, &off, b1);
+    array_line(f, "Float32", "friction_angle", 1, &off, b1);
+    array_line(f, "Float32", "Je", 1, &off, b1);
+    array_line(f, "Float32", "volume", 1, &off, b1);
+    fprintf(f, "</PointData>\n<Points>\n");
+    array_line(f, "Float32", "Points", 3, &off, b3);
+    fprintf(f, "</Points>\n<Verts>\n");
+    array_line(f, "Int64", "connectivity", 1, &off, b8);
+    array_line(f, "Int64", "offsets", 1, &off, b8);
+    fprintf(f, "</Verts>\n</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_");
+    write_block(f, a->vel, b3);
+    write_block(f, material, b2);
+    write_block(f, a->q, b1);
+    write_block(f, a->phi, b1);
+    write_block(f, a->je, b1);
+    write_block(f, a->vol, b1);
+    write_block(f, a->xyz, b3);
+    write_block(f, a->conn, b8);
+    write_block(f, a->offs, b8);
+    fprintf(f, "\n</AppendedData>\n</VTKFile>\n");
+}
+
+sm_status sm_write_vtp(const sm_world *w, const char *path, char *err, size_t errlen) {
+    sm_particles_view pv;
+    sm_world_particles(w, &pv);
+    vtp_arrays arr;
+    memset(&arr, 0, sizeof arr);
+    sm_status st = SM_OK;
+    if (!arrays_fill(&arr, w, &pv)) {
+        snprintf(err, errlen, "%s: out of memory", path);
+        st = SM_ERR_NOMEM;
+    }
+    sm_atomic_file a;
+    if (st == SM_OK) st = sm_atomic_open(&a, path, err, errlen);
+    if (st == SM_OK) {
+        write_vtp(a.f, &arr, pv.material, pv.n);
+        st = sm_atomic_commit(&a, err, errlen);
+    }
+    arrays_free(&arr);
+    return st;
+}
+
+sm_status sm_write_pvd(const char *path, const char *const *files, const double *times, int count, char *err,
+                       size_t errlen) {
+    sm_atomic_file a;
+    sm_status st = sm_atomic_open(&a, path, err, errlen);
+    if (st != SM_OK) return st;
+    fprintf(a.f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n<Collection>\n");
+    for (int i = 0; i < count; i++)
+        fprintf(a.f, "<DataSet timestep=\"%.9g\" group=\"\" part=\"0\" file=\"%s\"/>\n", times[i], files[i]);
+    fprintf(a.f, "</Collection>\n</VTKFile>\n");
+    return sm_atomic_commit(&a, err, errlen);
+}

@@ -1,0 +1,88 @@
+/* The frame loop; see run.h. */
+#define _POSIX_C_SOURCE 200809L
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "app/io/files.h"
+#include "app/run.h"
+
+double sm_run_wall(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+double sm_run_elapsed(const sm_run_frame *fr) { return sm_run_wall() - fr->start_wall; }
+
+/* Advances the world to frame f's time; a failure of the world or of the world_error check. */
+static sm_status advance_to(const sm_run_config *cfg, int f, char *err, size_t errlen) {
+    sm_world *w = cfg->info.w;
+    const double t0 = sm_world_time(w), t1 = f / cfg->info.fps;
+    sm_world_reset_step_stats(w);
+    sm_status s = sm_world_advance(w, t1);
+    const char *merr = cfg->world_error ? cfg->world_error(cfg->world_error_ctx) : NULL;
+    if (merr) {
+        snprintf(err, errlen, "%s", merr);
+        return SM_ERR_INVALID;
+    }
+    if (s != SM_OK)
+        snprintf(err, errlen, "frame %d (from t = %.6g s to %.6g s, stopped at t = %.6g s): %s", f, t0, t1, sm_world_time(w),
+                 sm_world_errmsg(w));
+    return s;
+}
+
+static sm_status frame_loop(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm_run_result *res, char *err,
+                            size_t errlen) {
+    sm_run_frame fr;
+    sm_diagnostics d;
+    fr.out_dir = cfg->info.out_dir;
+    fr.w = cfg->info.w;
+    fr.d = &d;
+    fr.start_wall = sm_run_wall();
+    for (int f = 0; f <= cfg->info.frames; f++) {
+        if (f > 0) {
+            if (cfg->stop && *cfg->stop) {
+                res->stopped = 1;
+                return SM_OK;
+            }
+            sm_status st = advance_to(cfg, f, err, errlen);
+            if (st != SM_OK) return st;
+        }
+        sm_world_diagnostics(cfg->info.w, &d);
+        fr.frame = f;
+        for (int i = 0; i < nsinks; i++) {
+            sm_status st = sinks[i].frame(&sinks[i], &fr, err, errlen);
+            if (st != SM_OK) {
+                res->failed_sink = sinks[i].name;
+                return st;
+            }
+        }
+        res->frames_written = f + 1;
+    }
+    return SM_OK;
+}
+
+sm_status sm_run_frames(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm_run_result *res, char *err,
+                        size_t errlen) {
+    memset(res, 0, sizeof *res);
+    sm_status st = SM_OK;
+    int begun = 0;
+    for (; begun < nsinks && st == SM_OK; begun++) {
+        if (sinks[begun].begin) st = sinks[begun].begin(&sinks[begun], &cfg->info, err, errlen);
+        if (st != SM_OK) res->failed_sink = sinks[begun].name;
+    }
+    if (st != SM_OK) begun--; /* the failed sink cleaned up after itself */
+    if (st == SM_OK) st = frame_loop(cfg, sinks, nsinks, res, err, errlen);
+    for (int i = 0; i < begun; i++) {
+        if (!sinks[i].end) continue;
+        char e2[SM_MSG_MAX];
+        sm_status se = sinks[i].end(&sinks[i], st, e2, sizeof e2);
+        if (se != SM_OK && st == SM_OK) {
+            st = se;
+            res->failed_sink = sinks[i].name;
+            snprintf(err, errlen, "%s", e2);
+        }
+    }
+    return st;
+}

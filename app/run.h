@@ -1,0 +1,76 @@
+/* The frame loop of `sandmpm run`: advance a world frame by frame and hand every frame to a list
+ * of sinks, the writers of a run's outputs (app/sinks.h: PLY, VTK, diagnostics CSV, the render
+ * manifest, PNG renders; cli/: the progress line). A sink sees a run begin, each frame (0 is the
+ * initial state, then every 1/fps s), and the end with the run's status; a checkpoint writer or a
+ * gather of distributed particles is one more sink, and the loop does not change.
+ *
+ *   begin  in list order, before frame 0; a failure stops the run before any frame
+ *   frame  in list order, for frames 0..frames; a failure stops the run after that frame
+ *   end    for every sink whose begin succeeded, in list order, with the run's status (SM_OK if
+ *          all frames were written); it closes what the sink holds, and may itself fail
+ * begin and end may be NULL (a sink that holds nothing between frames). */
+#ifndef SM_APP_RUN_H
+#define SM_APP_RUN_H
+
+#include <signal.h>
+#include <stddef.h>
+
+#include "sandmpm/sandmpm.h"
+
+/* What every sink knows of the run. */
+typedef struct sm_run_info {
+    const char *out_dir; /* the output folder (exists) */
+    sm_world *w;         /* the world, built */
+    int frames;          /* frames after frame 0 */
+    double fps;          /* frames per second of simulated time */
+} sm_run_info;
+
+/* One frame as the sinks see it. */
+typedef struct sm_run_frame {
+    const char *out_dir;      /* the output folder */
+    int frame;                /* 0 .. frames */
+    const sm_world *w;        /* the world at the frame's time */
+    const sm_diagnostics *d;  /* its diagnostics (min/max dt: the steps since the previous frame) */
+    double start_wall;        /* monotonic wall clock (sm_run_wall) when the loop started */
+} sm_run_frame;
+
+typedef struct sm_sink sm_sink;
+struct sm_sink {
+    const char *name;   /* for messages: "ply", "vtk", ... */
+    const void *config; /* the sink's settings (the caller's, alive through the run), or NULL */
+    void *state;        /* the sink's own, from begin to end */
+    sm_status (*begin)(sm_sink *s, const sm_run_info *run, char *err, size_t errlen);
+    sm_status (*frame)(sm_sink *s, const sm_run_frame *fr, char *err, size_t errlen);
+    sm_status (*end)(sm_sink *s, sm_status run_status, char *err, size_t errlen);
+};
+
+/* The run's settings beyond the sinks. */
+typedef struct sm_run_config {
+    sm_run_info info;
+    /* NULL, or a check after each advance: a message (e.g. a scene's motion-function error) stops
+     * the run with SM_ERR_INVALID. */
+    const char *(*world_error)(void *ctx);
+    void *world_error_ctx;
+    /* NULL, or a flag that, once non-zero, stops the run before the next frame is computed (a
+     * signal handler sets it). */
+    volatile sig_atomic_t *stop;
+} sm_run_config;
+
+typedef struct sm_run_result {
+    int frames_written; /* frames every sink wrote: frames 0 .. frames_written - 1 */
+    int stopped;        /* 1 if *stop ended the run early */
+    const char *failed_sink; /* the sink whose begin, frame or end failed, or NULL */
+} sm_run_result;
+
+/* Runs frames 0..info.frames through the sinks. Returns SM_OK, or the first failure's status
+ * with its message in err (a world's failure: the frame, the times and its sm_world_errmsg). */
+sm_status sm_run_frames(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm_run_result *res, char *err,
+                        size_t errlen);
+
+/* Monotonic wall clock, s. */
+double sm_run_wall(void);
+
+/* Seconds since the loop started, for a frame. */
+double sm_run_elapsed(const sm_run_frame *fr);
+
+#endif

@@ -1,0 +1,119 @@
+/* The sandmpm program's parts (DESIGN §2: thin — arguments, progress, exit codes):
+ *   main.c      dispatch to a command
+ *   exit.c      the one table from sm_status to exit code
+ *   usage.c     the help texts
+ *   options.c   what the commands share: option parsing, loading and building a scene, the video
+ *   cmd_run.c   `sandmpm run`: the sinks and the frame loop (app/run.h); progress.c: its progress line
+ *   cmd_info.c, cmd_render.c, cmd_bench.c: the other commands; signals.c: SIGINT and SIGTERM */
+#ifndef SM_CLI_H
+#define SM_CLI_H
+
+#include <signal.h>
+#include <stddef.h>
+#include <stdio.h>
+
+#include "app/run.h"
+#include "app/scene.h"
+#include "sandmpm/sandmpm.h"
+
+extern const char sm_default_scene[]; /* scenes/default.lua, embedded at build time */
+
+/* ------------------------------------------------------------------------------------------ */
+/* exit.c                                                                                       */
+
+/* The program's exit code for a command's status. */
+int cli_exit_code(sm_status s);
+/* The exit code of a command stopped by signal sig (the shell's convention, 128 + sig). */
+int cli_exit_code_signal(int sig);
+/* The status an exit code of this program (e.g. the bench sibling's) stands for. */
+sm_status cli_status_of_exit_code(int code);
+/* "exit codes: 0 done, 2 bad input, ..." and a newline. */
+void cli_print_exit_codes(FILE *f);
+
+/* ------------------------------------------------------------------------------------------ */
+/* usage.c                                                                                      */
+
+void cli_usage(FILE *f);
+void cli_usage_run(FILE *f);
+void cli_usage_info(FILE *f);
+void cli_usage_render(FILE *f);
+void cli_usage_bench(FILE *f);
+
+/* The program of the other precision, in this program's directory (CMake: SM_SIBLING); "" if
+ * the build has none. */
+#ifndef SM_BENCH_SIBLING
+#define SM_BENCH_SIBLING ""
+#endif
+
+/* ------------------------------------------------------------------------------------------ */
+/* options.c                                                                                    */
+
+#define CLI_MAX_PARAMS 64
+#define CLI_MAX_FRAMES 10000000 /* frames of a run */
+
+/* 1 if any argument is --help or -h: the command then prints its usage and does nothing else. */
+int cli_help_requested(int argc, char **argv);
+/* A whole number in [lo, hi] (1), or 0. */
+int cli_parse_int(const char *s, long lo, long hi, int *out);
+/* A finite number (1), or 0. */
+int cli_parse_double(const char *s, double *out);
+
+/* Options shared by run and info. */
+typedef struct cli_scene_opts {
+    const char *scene; /* the scene file, or NULL: the built-in default */
+    sm_scene_param params[CLI_MAX_PARAMS];
+    int nparams;
+    const char *quality;
+    int threads;
+    char keybuf[4096]; /* the --set keys */
+    size_t keybuf_used;
+} cli_scene_opts;
+
+/* Parses --set/--quality/--threads at argv[*i] (moving *i past its value); 1 if it was one of
+ * them, 0 if not, -1 on error (message printed). */
+int cli_parse_scene_opt(const char *cmd, int argc, char **argv, int *i, cli_scene_opts *so);
+/* Loads the scene (file or the embedded default); message printed on failure. */
+sm_status cli_load_scene(const char *cmd, const cli_scene_opts *so, sm_scene **sc);
+/* Refuses a scene whose memory estimate exceeds 90% of this machine's memory. */
+sm_status cli_check_memory(const char *cmd, const sm_scene_settings *st);
+/* Builds the scene's world; message printed on failure. */
+sm_status cli_build_scene(const char *cmd, sm_scene *sc);
+/* Physical memory of this machine, bytes (0 if unknown). */
+double cli_machine_bytes(void);
+/* Removes from dir the temporaries that a killed run or render left (app/io/files.h), saying so. */
+sm_status cli_remove_stale(const char *cmd, const char *dir);
+/* dir/video.mp4 from dir's PNG frames at fps (app/io/video.h); the outcome printed. */
+sm_status cli_make_video(const char *dir, double fps);
+
+/* ------------------------------------------------------------------------------------------ */
+/* signals.c                                                                                    */
+
+/* 0, or the signal (SIGINT, SIGTERM) that asked the command to stop after the frame in progress. */
+extern volatile sig_atomic_t cli_stop;
+/* Handles SIGINT and SIGTERM: the first sets cli_stop; the second removes the temporaries being
+ * written, prints the last note and exits. */
+void cli_signals_install(void);
+/* What an immediate stop leaves complete, e.g. "sandmpm run: ...; frames 0..4 are complete in DIR/". */
+void cli_signals_note(const char *note);
+/* "SIGINT", "SIGTERM". */
+const char *cli_signal_name(int sig);
+/* A sink (app/run.h) that keeps the note up to date: the frames complete in the run's folder. */
+sm_sink cli_interrupt_note_sink(void);
+
+/* ------------------------------------------------------------------------------------------ */
+/* The commands: argv after the command's name. Each prints its messages and returns its exit
+ * code (exit.c). */
+
+int cli_run(int argc, char **argv);
+int cli_info(int argc, char **argv);
+int cli_render(int argc, char **argv);
+int cli_bench(int argc, char **argv);
+
+/* progress.c: the run's banner and progress line on stderr, as a sink (app/run.h). */
+typedef struct cli_progress_config {
+    const char *scene_label; /* "scenes/castle.lua" or "default scene" */
+    const char *quality;     /* "preview", ... */
+} cli_progress_config;
+sm_sink cli_progress_sink(const cli_progress_config *config);
+
+#endif

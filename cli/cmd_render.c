@@ -1,0 +1,174 @@
+/* sandmpm render OUTDIR: a run's PLY frames to PNG images (and a video). */
+#define _POSIX_C_SOURCE 200809L
+#include <dirent.h>
+#include <errno.h>
+#include <string.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include "app/io/files.h"
+#include "app/io/csv.h"
+#include "app/io/ply.h"
+#include "app/render_job.h"
+#include "cli/cli.h"
+
+typedef struct render_args {
+    const char *dir;
+    int width, height, threads, video;
+    sm_color_mode color;
+} render_args;
+
+static sm_status parse_args(int argc, char **argv, render_args *a) {
+    memset(a, 0, sizeof *a);
+    a->width = 1280;
+    a->height = 720;
+    a->color = SM_COLOR_SAND;
+    for (int i = 0; i < argc; i++) {
+        const char *s = argv[i];
+        if (!strcmp(s, "--color") && i + 1 < argc) {
+            const char *c = argv[++i];
+            if (!strcmp(c, "sand")) a->color = SM_COLOR_SAND;
+            else if (!strcmp(c, "speed")) a->color = SM_COLOR_SPEED;
+            else if (!strcmp(c, "material")) a->color = SM_COLOR_MATERIAL;
+            else if (!strcmp(c, "q")) a->color = SM_COLOR_Q;
+            else {
+                fprintf(stderr, "sandmpm render: --color: expected sand, speed, material or q, got \"%s\"\n", c);
+                return SM_ERR_INVALID;
+            }
+        } else if (!strcmp(s, "--size") && i + 1 < argc) {
+            if (sscanf(argv[++i], "%dx%d", &a->width, &a->height) != 2 || a->width < 16 || a->height < 16 ||
+                a->width > 16384 || a->height > 16384) {
+                fprintf(stderr, "sandmpm render: --size: expected WxH (16..16384), got \"%s\"\n", argv[i]);
+                return SM_ERR_INVALID;
+            }
+        } else if (!strcmp(s, "--threads") && i + 1 < argc) {
+            if (!cli_parse_int(argv[++i], 1, 1024, &a->threads)) {
+                fprintf(stderr, "sandmpm render: --threads: expected 1..1024, got \"%s\"\n", argv[i]);
+                return SM_ERR_INVALID;
+            }
+        } else if (!strcmp(s, "--video")) {
+            a->video = 1;
+        } else if (s[0] == '-' || a->dir) {
+            fprintf(stderr, "sandmpm render: unexpected argument \"%s\" (see sandmpm render --help)\n", s);
+            return SM_ERR_INVALID;
+        } else {
+            a->dir = s;
+        }
+    }
+    if (!a->dir) {
+        fprintf(stderr, "sandmpm render: which run? usage: sandmpm render OUTDIR\n");
+        return SM_ERR_INVALID;
+    }
+    char err[SM_MSG_MAX];
+    sm_status st = sm_check_folder_name(a->dir, err, sizeof err);
+    if (st != SM_OK) fprintf(stderr, "sandmpm render: %s\n", err);
+    return st;
+}
+
+/* The frame number of a frame file's name "frame_NNNN.ply" (at least 4 digits, as the run writes
+ * them: %04d), or -1. */
+static int frame_number(const char *name) {
+    size_t n = strlen(name), d = 6;
+    if (n < 14 || strncmp(name, "frame_", 6) != 0 || strcmp(name + n - 4, ".ply") != 0) return -1;
+    while (d < n - 4 && name[d] >= '0' && name[d] <= '9') d++;
+    if (d != n - 4 || d - 6 < 4 || d - 6 > 9) return -1;
+    int f = atoi(name + 6);
+    char again[32];
+    snprintf(again, sizeof again, "frame_%04d.ply", f);
+    return strcmp(again, name) == 0 ? f : -1; /* not frame_00012.ply */
+}
+
+/* The frame_NNNN.ply files in dir: how many, and the largest frame number. */
+static sm_status scan_frames(const char *dir, int *count, int *maxf) {
+    DIR *dd = opendir(dir);
+    if (!dd) {
+        fprintf(stderr, "sandmpm render: %s: %s\n", dir, strerror(errno));
+        return SM_ERR_IO;
+    }
+    *maxf = -1;
+    *count = 0;
+    struct dirent *de;
+    while ((de = readdir(dd))) {
+        int fno = frame_number(de->d_name);
+        if (fno < 0) continue;
+        ++*count;
+        if (fno > *maxf) *maxf = fno;
+    }
+    closedir(dd);
+    if (*count == 0) {
+        fprintf(stderr, "sandmpm render: %s: no frame_NNNN.ply files (run `sandmpm run --out %s` first)\n", dir, dir);
+        return SM_ERR_IO;
+    }
+    return SM_OK;
+}
+
+/* Frame f's PLY to its PNG (nothing if there is no such PLY). *done counts the frames rendered. */
+static sm_status render_frame(sm_render_job *job, const char *dir, int f, int *done, char *err, size_t errlen) {
+    char ply[SM_PATH_MAX], png[SM_PATH_MAX];
+    snprintf(ply, sizeof ply, "%s/frame_%04d.ply", dir, f);
+    snprintf(png, sizeof png, "%s/frame_%04d.png", dir, f);
+    if (access(ply, F_OK) != 0) return SM_OK;
+    sm_frame fr;
+    sm_status st = sm_ply_read(ply, &fr, err, errlen);
+    if (st == SM_OK) {
+        st = sm_render_job_frame(job, &fr, f, png, err, errlen);
+        sm_frame_free(&fr);
+    }
+    if (st == SM_OK) ++*done;
+    return st;
+}
+
+/* The frame rate from diagnostics.csv (the time of frame 1), else 24. */
+static sm_status make_video(const char *dir) {
+    char p[SM_PATH_MAX];
+    snprintf(p, sizeof p, "%s/diagnostics.csv", dir);
+    return cli_make_video(dir, sm_csv_read_fps(p, 24));
+}
+
+/* Renders the frames in order; stops early after a frame if cli_stop is set. */
+static sm_status render_all(const render_args *a, int count, int maxf, int *done) {
+    char err[SM_MSG_MAX], note[SM_MSG_MAX];
+    sm_render_job job;
+    sm_status st = sm_render_job_open(&job, a->dir, a->width, a->height, a->color, a->threads, err, sizeof err);
+    const int tty = isatty(fileno(stderr));
+    const double t0 = sm_run_wall();
+    *done = 0;
+    for (int f = 0; f <= maxf && st == SM_OK && !cli_stop; f++) {
+        st = render_frame(&job, a->dir, f, done, err, sizeof err);
+        if (st == SM_OK && tty) fprintf(stderr, "\rrendered %d/%d", *done, count);
+        snprintf(note, sizeof note, "sandmpm render: stopped at once; %d frames rendered to %s/", *done, a->dir);
+        cli_signals_note(note);
+    }
+    sm_render_job_close(&job);
+    if (st != SM_OK) {
+        fprintf(stderr, "%ssandmpm render: %s\n", tty ? "\n" : "", err);
+        return st;
+    }
+    fprintf(stderr, "%srendered %d frames to %s/frame_NNNN.png in %.1f s\n", tty ? "\r" : "", *done, a->dir,
+            sm_run_wall() - t0);
+    return SM_OK;
+}
+
+static int render_command(int argc, char **argv) {
+    if (cli_help_requested(argc, argv)) {
+        cli_usage_render(stdout);
+        return cli_exit_code(SM_OK);
+    }
+    render_args a;
+    int count, maxf, done = 0;
+    sm_status st = parse_args(argc, argv, &a);
+    if (st == SM_OK) st = scan_frames(a.dir, &count, &maxf);
+    if (st == SM_OK) st = cli_remove_stale("render", a.dir);
+    if (st != SM_OK) return cli_exit_code(st);
+    cli_signals_install();
+    st = render_all(&a, count, maxf, &done);
+    if (cli_stop) {
+        fprintf(stderr, "sandmpm render: stopped by %s after %d of %d frames\n", cli_signal_name(cli_stop), done, count);
+        return cli_exit_code_signal(cli_stop);
+    }
+    if (st == SM_OK && a.video) st = make_video(a.dir);
+    if (cli_stop) return cli_exit_code_signal(cli_stop);
+    return cli_exit_code(st);
+}
+
+int cli_render(int argc, char **argv) { return render_command(argc, argv); }

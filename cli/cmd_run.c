@@ -1,0 +1,204 @@
+/* sandmpm run [SCENE]: load and build the scene, then the frame loop (app/run.h) with the output
+ * sinks the scene's outputs table asks for (app/sinks.h) and the progress line. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <string.h>
+
+#include "app/io/files.h"
+#include "app/sinks.h"
+#include "cli/cli.h"
+
+typedef struct run_args {
+    cli_scene_opts so;
+    const char *out;
+    int frames, render, video;
+    double end;
+} run_args;
+
+static sm_status parse_args(int argc, char **argv, run_args *a) {
+    memset(a, 0, sizeof *a);
+    a->frames = -1;
+    a->end = -1;
+    for (int i = 0; i < argc; i++) {
+        const char *s = argv[i];
+        int r = cli_parse_scene_opt("run", argc, argv, &i, &a->so);
+        if (r < 0) return SM_ERR_INVALID;
+        if (r > 0) continue;
+        if (!strcmp(s, "--out") && i + 1 < argc) {
+            a->out = argv[++i];
+        } else if (!strcmp(s, "--frames") && i + 1 < argc) {
+            if (!cli_parse_int(argv[++i], 1, 10000000, &a->frames)) {
+                fprintf(stderr, "sandmpm run: --frames: expected a whole number >= 1, got \"%s\"\n", argv[i]);
+                return SM_ERR_INVALID;
+            }
+        } else if (!strcmp(s, "--end") && i + 1 < argc) {
+            if (!cli_parse_double(argv[++i], &a->end) || !(a->end > 0)) {
+                fprintf(stderr, "sandmpm run: --end: expected seconds > 0, got \"%s\"\n", argv[i]);
+                return SM_ERR_INVALID;
+            }
+        } else if (!strcmp(s, "--render")) {
+            a->render = 1;
+        } else if (!strcmp(s, "--video")) {
+            a->video = 1;
+        } else if (s[0] == '-' || a->so.scene) {
+            fprintf(stderr, "sandmpm run: unexpected argument \"%s\" (see sandmpm run --help)\n", s);
+            return SM_ERR_INVALID;
+        } else {
+            a->so.scene = s;
+        }
+    }
+    if (a->frames > 0 && a->end > 0) {
+        fprintf(stderr, "sandmpm run: give --frames or --end, not both\n");
+        return SM_ERR_INVALID;
+    }
+    if (a->video && !a->render) a->render = 1;
+    return SM_OK;
+}
+
+/* Everything the sinks are configured with; alive through the run. */
+typedef struct run_outputs {
+    sm_manifest_camera camera;
+    sm_png_sink_config png;
+    cli_progress_config progress;
+    sm_sink sinks[8];
+    int nsinks;
+} run_outputs;
+
+/* The sinks in the order they see each frame: frame files, the manifest, renders (which read the
+ * manifest), diagnostics, progress. */
+static void choose_sinks(const run_args *a, const sm_scene_settings *st, run_outputs *o) {
+    o->camera.has_camera = st->has_camera;
+    memcpy(o->camera.eye, st->eye, sizeof st->eye);
+    memcpy(o->camera.target, st->target, sizeof st->target);
+    memcpy(o->camera.up, st->up, sizeof st->up);
+    o->camera.fov = st->fov;
+    o->png.width = 1280;
+    o->png.height = 720;
+    o->png.color = SM_COLOR_SAND;
+    o->png.threads = a->so.threads;
+    o->progress.scene_label = a->so.scene ? a->so.scene : "default scene";
+    o->progress.quality = a->so.quality ? a->so.quality : "preview";
+    o->nsinks = 0;
+    if (st->out_ply || a->render) o->sinks[o->nsinks++] = sm_sink_ply(); /* `render` reads them later */
+    if (st->out_vtk) o->sinks[o->nsinks++] = sm_sink_vtk();
+    o->sinks[o->nsinks++] = sm_sink_manifest(&o->camera);
+    if (a->render) o->sinks[o->nsinks++] = sm_sink_png(&o->png);
+    if (st->out_csv) o->sinks[o->nsinks++] = sm_sink_csv();
+    o->sinks[o->nsinks++] = cli_progress_sink(&o->progress);
+    o->sinks[o->nsinks++] = cli_interrupt_note_sink();
+}
+
+static const char *motion_error(void *scene) { return sm_scene_motion_error(scene); }
+
+/* The frames to run: --frames, --end or the scene's, within what a run can hold. */
+static sm_status frame_count(const run_args *a, const sm_scene_settings *set, int *nframes) {
+    const double fps = set->fps;
+    if (!(fps > 0) || !isfinite(fps)) {
+        fprintf(stderr, "sandmpm run: the scene's fps must be a number > 0, got %g\n", fps);
+        return SM_ERR_INVALID;
+    }
+    double n = a->frames > 0 ? a->frames : set->frames;
+    if (a->end > 0) {
+        n = ceil(a->end * fps - 1e-9);
+        if (!(n >= 1)) {
+            fprintf(stderr, "sandmpm run: --end %g s is less than one frame at %g fps (a frame is %g s)\n", a->end, fps,
+                    1 / fps);
+            return SM_ERR_INVALID;
+        }
+    }
+    if (!(n >= 1 && n <= CLI_MAX_FRAMES)) {
+        fprintf(stderr, "sandmpm run: %s%.0f frames at %g fps; a run has 1 to %d frames\n",
+                a->end > 0 ? "--end gives " : a->frames > 0 ? "" : "the scene asks for ", n, fps, CLI_MAX_FRAMES);
+        return SM_ERR_INVALID;
+    }
+    if (!isfinite(n / fps)) {
+        fprintf(stderr, "sandmpm run: %.0f frames at %g fps end at an infinite time\n", n, fps);
+        return SM_ERR_INVALID;
+    }
+    *nframes = (int)n;
+    return SM_OK;
+}
+
+/* What the folder holds after a run that did not finish. */
+static void say_what_is_complete(const char *out, int frames_written, int nframes) {
+    if (frames_written > 0)
+        fprintf(stderr, "sandmpm run: frames 0..%d of 0..%d are complete in %s/\n", frames_written - 1, nframes, out);
+    else
+        fprintf(stderr, "sandmpm run: no frame was completed in %s/\n", out);
+}
+
+/* The frame loop into out; the message of a failure or a stop printed. *stopped: the signal that
+ * stopped it early, or 0. */
+static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, int nframes, int *stopped) {
+    const sm_scene_settings *st = sm_scene_get_settings(sc);
+    run_outputs o;
+    choose_sinks(a, st, &o);
+    sm_run_config cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.info.out_dir = out;
+    cfg.info.w = sm_scene_world(sc);
+    cfg.info.frames = nframes;
+    cfg.info.fps = st->fps;
+    cfg.world_error = motion_error;
+    cfg.world_error_ctx = sc;
+    cfg.stop = &cli_stop;
+    sm_run_result res;
+    char err[SM_MSG_MAX];
+    sm_status s = sm_run_frames(&cfg, o.sinks, o.nsinks, &res, err, sizeof err);
+    *stopped = res.stopped ? (int)cli_stop : 0;
+    if (s != SM_OK) fprintf(stderr, "sandmpm run: %s\n", err);
+    if (*stopped)
+        fprintf(stderr, "sandmpm run: stopped by %s after frame %d (t = %.6g s)\n", cli_signal_name(*stopped),
+                res.frames_written - 1, (res.frames_written - 1) / st->fps);
+    if (s != SM_OK || *stopped) say_what_is_complete(out, res.frames_written, nframes);
+    return s;
+}
+
+/* The output folder: created, and cleared of temporaries that a killed run left. */
+static sm_status prepare_folder(const char *out) {
+    char err[SM_MSG_MAX];
+    sm_status st = sm_make_dirs(out, err, sizeof err);
+    if (st != SM_OK) {
+        fprintf(stderr, "sandmpm run: %s\n", err);
+        return st;
+    }
+    return cli_remove_stale("run", out);
+}
+
+static int run_command(int argc, char **argv) {
+    if (cli_help_requested(argc, argv)) {
+        cli_usage_run(stdout);
+        return cli_exit_code(SM_OK);
+    }
+    run_args a;
+    sm_status st = parse_args(argc, argv, &a);
+    if (st != SM_OK) return cli_exit_code(st);
+    sm_scene *sc = NULL;
+    if ((st = cli_load_scene("run", &a.so, &sc)) != SM_OK) return cli_exit_code(st);
+    const sm_scene_settings *set = sm_scene_get_settings(sc);
+    const double fps = set->fps;
+    int nframes = 0, stopped = 0;
+    st = frame_count(&a, set, &nframes);
+    if (st == SM_OK) st = cli_check_memory("run", set);
+    if (st == SM_OK) st = cli_build_scene("run", sc);
+    /* Only now, with a valid scene, touch the file system. */
+    char outbuf[SM_PATH_MAX];
+    const char *out = a.out;
+    if (st == SM_OK && !out) {
+        snprintf(outbuf, sizeof outbuf, "out/%s", a.so.scene ? set->name : "default");
+        out = outbuf;
+    }
+    if (st == SM_OK) st = prepare_folder(out);
+    if (st == SM_OK) {
+        cli_signals_install();
+        st = run_frames(&a, sc, out, nframes, &stopped);
+    }
+    sm_scene_destroy(sc);
+    if (stopped) return cli_exit_code_signal(stopped);
+    if (st == SM_OK && a.video) st = cli_make_video(out, fps);
+    if (cli_stop) return cli_exit_code_signal(cli_stop); /* during the video */
+    return cli_exit_code(st);
+}
+
+int cli_run(int argc, char **argv) { return run_command(argc, argv); }

@@ -1,0 +1,76 @@
+/* The help texts of the program and its commands. */
+#include "cli/cli.h"
+
+void cli_usage(FILE *f) {
+    fprintf(f, "sandmpm %s: dry sand with the Material Point Method (Klar 2016)\n\n"
+               "usage: sandmpm COMMAND [ARGS]\n\n"
+               "commands:\n"
+               "  run [SCENE]     run a scene file (Lua); without SCENE the built-in default:\n"
+               "                  a 3D sand column collapsing on the ground\n"
+               "  info SCENE      print the resolved scene (particles, grid, time steps, memory) without running it\n"
+               "  render OUTDIR   turn a run's frames (OUTDIR/frame_NNNN.ply) into PNG images\n"
+               "  bench           particle-steps/s per stage: 2D and 3D, float and double, 1 and 2 threads\n\n"
+               "  --help          this text; `sandmpm COMMAND --help` for a command's options\n"
+               "  --version       version and precision\n\n",
+            sm_version());
+    cli_print_exit_codes(f);
+    fprintf(f, "scene format: docs/scene-format.md\n");
+}
+
+void cli_usage_run(FILE *f) {
+    fprintf(f, "usage: sandmpm run [SCENE] [OPTIONS]\n\n"
+               "Runs SCENE (a Lua scene file, docs/scene-format.md), or without SCENE the built-in default\n"
+               "scene: a sand column (radius 0.1 m, height 0.4 m) collapsing on a sticky ground.\n\n"
+               "  --out DIR          output directory (default: out/NAME, NAME = the scene file's stem or \"default\")\n"
+               "  --frames N         frames after frame 0 (default: the scene's)\n"
+               "  --end SECONDS      simulated end time instead of --frames\n"
+               "  --set KEY=VALUE    scene parameter, seen by the scene as params.KEY (repeatable)\n"
+               "  --quality Q        preview (default), paper (the thesis's resolution) or test (tiny, for CI)\n"
+               "  --threads N        OpenMP threads (default: all cores); results do not depend on it\n"
+               "  --render           also render each frame to OUTDIR/frame_NNNN.png\n"
+               "  --video            with --render: assemble OUTDIR/video.mp4 with ffmpeg at the end\n\n"
+               "Writes per frame (as the scene's outputs table says): frame_NNNN.ply (binary PLY),\n"
+               "frame_NNNN.vtp with frames.pvd (VTK/ParaView), and diagnostics.csv; each file atomically\n"
+               "(written as .NAME.tmp.PID, then renamed), so a file under its name is always whole.\n\n"
+               "Ctrl-C (SIGINT) or SIGTERM stops after the frame in progress and says which frames are\n"
+               "complete; a second one stops at once (the files being written are removed). Temporaries\n"
+               "that a killed run left are removed by the next run in the folder. A write that fails (a\n"
+               "full disk, no permission) stops the run with exit code 4, the file and the reason.\n");
+}
+
+void cli_usage_info(FILE *f) {
+    fprintf(f, "usage: sandmpm info SCENE [--set KEY=VALUE]... [--quality preview|paper|test]\n\n"
+               "Loads and builds SCENE without running it and prints: particles (estimated and seeded), the\n"
+               "grid, the time-step bounds, frames, and the memory estimate. A scene whose memory estimate\n"
+               "exceeds this machine's memory is refused (exit 2) with the estimate in the message.\n");
+}
+
+void cli_usage_render(FILE *f) {
+    fprintf(f, "usage: sandmpm render OUTDIR [--color sand|speed|material|q] [--size WxH] [--threads N] [--video]\n\n"
+               "Renders every OUTDIR/frame_NNNN.ply of a run into OUTDIR/frame_NNNN.png: particles as lit\n"
+               "spheres with shadows (disks in 2D), random brown tones (or colour by speed, material, or\n"
+               "hardening q), the ground and the colliders (from OUTDIR/render.txt, written by `run`).\n"
+               "  --size WxH   image size (default 1280x720)\n"
+               "  --video      assemble OUTDIR/video.mp4 with ffmpeg (if installed)\n"
+               "Ctrl-C stops after the frame in progress; PNG files are written atomically.\n");
+}
+
+void cli_usage_bench(FILE *f) {
+    fprintf(f, "usage: sandmpm bench [--dim 2,3] [--precision float,double] [--threads 1,2] [--particles N]\n"
+               "                     [--steps S] [--warmup W] [--csv [--no-header]]\n\n"
+               "Measures the explicit step on a block of sand collapsing onto a sticky ground (hardening,\n"
+               "quadratic kernel, APIC, every stage; 8 particles per cell in 3D, 4 in 2D): W warm-up steps,\n"
+               "then S measured steps per case, one case per dimension, precision and thread count. Prints\n"
+               "particle-steps/s in total and per stage, heap bytes per particle and heap allocations per\n"
+               "step. This program is built in one precision (%s); the other runs in %s next to it.\n\n"
+               "  --dim LIST         2, 3 or 2,3 (default 2,3)\n"
+               "  --precision LIST   float, double or float,double (default float,double)\n"
+               "  --threads LIST     thread counts, e.g. 1,2 (default 1,2)\n"
+               "  --particles N      particles per case, about (default 1e6; at least 100)\n"
+               "  --steps S          measured steps (default 20)\n"
+               "  --warmup W         unmeasured steps before them (default 10)\n"
+               "  --csv              one row per case: %s\n"
+               "  --no-header        with --csv: no header line\n",
+            sm_real_is_double() ? "double" : "float", SM_BENCH_SIBLING[0] ? SM_BENCH_SIBLING : "(none in this build)",
+            "dim,precision,threads,particles,particle_steps_per_s,bytes_per_particle");
+}

@@ -15,7 +15,9 @@
  *   static_friction_sticks = bool   particle_projection = bool
  *   domain = { min = {..}, max = {..}, walls = "sticky" | "slip" | "separate", wall_friction = mu }
  *   materials = { NAME = { model = "sand" | "elastic" ("sand"), density, E, nu,
- *                          friction_angle = degrees | hardening = {h0, h1, h2, h3} (sand: exactly one) } }
+ *                          friction_angle = degrees | repose_angle = degrees | hardening = {h0, h1, h2, h3}
+ *                          (sand: exactly one), cone_fit = "triaxial_compression" | "plane_strain" |
+ *                          "inscribed" | "simple_shear" } }
  *   shape = { type = "box", center, half_extent | size, rotation | axis_angle }
  *         | { type = "sphere", center, radius }
  *         | { type = "cylinder", center, radius, half_height | height, rotation | axis_angle }
@@ -1047,7 +1049,28 @@ static int shape_field(vctx *v, int t, const char *key, sm_shape *out) {
 }
 
 static const char *const mat_models[] = {"sand", "elastic"};
-static const char *const keys_mat[] = {"model", "density", "E", "nu", "friction_angle", "hardening"};
+static const char *const keys_mat[] = {"model", "density", "E", "nu", "friction_angle", "hardening", "cone_fit",
+                                       "repose_angle"};
+static const char *const cone_fits[] = {"triaxial_compression", "plane_strain", "inscribed", "simple_shear"};
+
+/* Material keys cone_fit (sm_cone_fit, by name) and repose_angle: the angle theta of steady flow,
+ * tan(theta) = mu_eff, turned into the friction angle of that fit in the scene's dimension
+ * (sm_friction_angle_for_effective_friction; docs/validation.md). Returns the friction angle, or
+ * -1 without repose_angle. */
+static double parse_cone_fit(vctx *v, int t, sm_material_def *m) {
+    m->cone_fit = (sm_cone_fit)enum_field(v, t, "cone_fit", cone_fits, 4, 0);
+    int has;
+    double theta = num_field(v, t, "repose_angle", 0, &has, 0.0, 1, 90.0, 0);
+    if (!has) return -1;
+    double phi = sm_friction_angle_for_effective_friction(tan(theta * 3.14159265358979323846 / 180), m->cone_fit, v->s->def.dim);
+    char a[32];
+    size_t old = vpush(v, "repose_angle");
+    if (!(phi >= 0 && phi < 90))
+        vfail(v, "%s degrees is beyond cone_fit \"%s\" in %dD (no friction angle below 90 gives it)", fmt_num(a, theta),
+              cone_fits[m->cone_fit], v->s->def.dim);
+    vpop(v, old);
+    return phi;
+}
 
 static void parse_material(vctx *v, int t, sm_material_def *out) {
     check_keys(v, t, keys_mat, NKEYS(keys_mat), "a material");
@@ -1059,13 +1082,18 @@ static void parse_material(vctx *v, int t, sm_material_def *out) {
     int has_fa, has_h = vget(v, t, "hardening") != LUA_TNIL;
     lua_pop(v->L, 1);
     double fa = num_field(v, t, "friction_angle", 0, &has_fa, 0.0, 1, 90.0, 0);
+    double fa_repose = parse_cone_fit(v, t, &m);
+    if (fa_repose >= 0) {
+        if (has_fa || model == 1) vfail(v, "repose_angle: %s", has_fa ? "give friction_angle or repose_angle, not both" : "only sand has one");
+        fa = fa_repose, has_fa = 1;
+    }
     if (model == 1) {
         if (has_fa || has_h)
             vfail(v, "an elastic material has no %s (only sand does)", has_fa ? "friction_angle" : "hardening");
     } else {
         if (has_fa && has_h) vfail(v, "give friction_angle or hardening, not both");
         if (!has_fa && !has_h)
-            vfail(v, "sand needs friction_angle = degrees or hardening = {h0, h1, h2, h3} (e.g. {35, 9, 0.2, 10})");
+            vfail(v, "sand needs friction_angle = degrees, repose_angle = degrees or hardening = {h0, h1, h2, h3} (e.g. {35, 9, 0.2, 10})");
         if (has_fa) {
             m.hardening = 0;
             m.friction_angle = fa;

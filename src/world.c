@@ -328,6 +328,8 @@ sm_status sm_material_def_check(const sm_material_def *m, char *err, size_t errl
     if (!(m->poisson_ratio > -1 && m->poisson_ratio < 0.5))
         return check_fail(err, errlen, "nu: must be in (-1, 0.5), got %g", m->poisson_ratio);
     if (m->kind == SM_MATERIAL_SAND) {
+        if ((unsigned)m->cone_fit > (unsigned)SM_CONE_SIMPLE_SHEAR)
+            return check_fail(err, errlen, "cone_fit: unknown value %d", (int)m->cone_fit);
         if (m->hardening) {
             const double h[4] = {m->h0, m->h1, m->h2, m->h3};
             for (int i = 0; i < 4; i++)
@@ -370,8 +372,8 @@ sm_status sm_world_add_material(sm_world *w, const sm_material_def *m, int *id) 
     r->h2 = m->h2;
     r->h3 = m->h3 * DEG;
     if (r->plastic)
-        r->alpha0 = (sm_real)(r->hardening ? sm_dp_alpha(sm_hardening_phi(0, r->h0, r->h1, r->h2, r->h3))
-                                           : sm_dp_alpha(m->friction_angle * DEG));
+        r->alpha0 = (sm_real)sm_dp_alpha_fit(r->hardening ? sm_hardening_phi(0, r->h0, r->h1, r->h2, r->h3)
+                                                          : m->friction_angle * DEG, (int)m->cone_fit, w->dim);
     r->wave_speed = sqrt((lambda + 2 * mu) / m->density);
     if (id) *id = w->nmats;
     w->nmats++;

@@ -42,7 +42,7 @@ static double urand(double lo, double hi) { return sm_test_uniform(&rng, lo, hi)
 
 typedef struct {
     sm_real mu, lambda, h0, h1, h2, h3;
-    int plastic, hardening;
+    int plastic, hardening, fit; /* fit: sm_cone_fit of the hardening alpha */
 } mat_t;
 
 /* The scalar path, as in step_dim.c plasticity. Returns the case (1 if elastic). */
@@ -77,7 +77,7 @@ static int scalar_plastic(int D, const mat_t *m, sm_real *F, sm_real *alpha, sm_
             if (m->hardening && dq > 0) {
                 *q += dq;
                 double phi = sm_hardening_phi((double)*q, m->h0, m->h1, m->h2, m->h3);
-                *alpha = (sm_real)sm_dp_alpha(phi);
+                *alpha = (sm_real)sm_dp_alpha_fit(phi, m->fit, D);
             }
         }
     }
@@ -197,17 +197,22 @@ static void fill_lane(sm_plastic_lanes *b, int l, int D, const sm_real *F, sm_re
     b->alpha[l] = alpha, b->q[l] = q;
     b->mu[l] = m->mu, b->lambda[l] = m->lambda;
     b->h0[l] = m->h0, b->h1[l] = m->h1, b->h2[l] = m->h2, b->h3[l] = m->h3;
-    b->plastic[l] = m->plastic, b->hardening[l] = m->hardening;
+    b->plastic[l] = m->plastic, b->hardening[l] = m->hardening, b->fit[l] = m->fit;
 }
 
 static void test_against_scalar(int D) {
     const double deg = SM_PI / 180;
     double mu, lambda;
     sm_lame(3.537e5, 0.3, &mu, &lambda);
-    mat_t mats[3] = {
-        {(sm_real)mu, (sm_real)lambda, (sm_real)(35 * deg), (sm_real)(9 * deg), (sm_real)0.2, (sm_real)(10 * deg), 1, 1},
-        {(sm_real)mu, (sm_real)lambda, 0, 0, 0, 0, 1, 0}, /* fixed friction angle */
-        {(sm_real)mu, (sm_real)lambda, 0, 0, 0, 0, 0, 0}, /* elastic */
+    const sm_real h0 = (sm_real)(35 * deg), h1 = (sm_real)(9 * deg), h3 = (sm_real)(10 * deg);
+    mat_t mats[6] = {
+        {(sm_real)mu, (sm_real)lambda, h0, h1, (sm_real)0.2, h3, 1, 1, SM_CONE_TRIAXIAL_COMPRESSION},
+        {(sm_real)mu, (sm_real)lambda, 0, 0, 0, 0, 1, 0, 0}, /* fixed friction angle */
+        {(sm_real)mu, (sm_real)lambda, 0, 0, 0, 0, 0, 0, 0}, /* elastic */
+        /* hardening with the other cone fits (sm_cone_fit) */
+        {(sm_real)mu, (sm_real)lambda, h0, h1, (sm_real)0.2, h3, 1, 1, SM_CONE_PLANE_STRAIN},
+        {(sm_real)mu, (sm_real)lambda, h0, h1, (sm_real)0.2, h3, 1, 1, SM_CONE_INSCRIBED},
+        {(sm_real)mu, (sm_real)lambda, h0, h1, (sm_real)0.2, h3, 1, 1, SM_CONE_SIMPLE_SHEAR},
     };
     static sm_plastic_lanes b, b2;
     double wF = 0, wT = 0, wQ = 0, wA = 0;
@@ -218,7 +223,7 @@ static void test_against_scalar(int D) {
         double margin[L], cond[L];
         int mi[L], kase[L], cat[L];
         for (int l = 0; l < L; l++) {
-            mi[l] = (int)(urand(0, 3));
+            mi[l] = (int)(urand(0, 6));
             cat[l] = (int)urand(0, 7);
             make_F(D, cat[l], F[l]);
             as[l] = mats[mi[l]].plastic ? (sm_real)urand(0, 0.5) : 0;

@@ -968,11 +968,12 @@ static void SM_FN(plasticity)(sm_world *w, const sm_step_ctx *c, size_t first) {
                         b.h3[l] = (sm_real)m->h3;
                         b.plastic[l] = m->plastic;
                         b.hardening[l] = m->hardening;
+                        b.fit[l] = (int32_t)m->def.cone_fit;
                     } else { /* padding: an undeformed elastic particle */
                         b.mu[l] = 1;
                         b.lambda[l] = 0;
                         b.h0[l] = b.h1[l] = b.h2[l] = b.h3[l] = 0;
-                        b.plastic[l] = b.hardening[l] = 0;
+                        b.plastic[l] = b.hardening[l] = b.fit[l] = 0;
                     }
                 }
                 if (mi >= 0) {

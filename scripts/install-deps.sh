@@ -3,7 +3,8 @@
 # are already installed are not touched, and apt is not called at all when nothing is missing.
 set -euo pipefail
 
-PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev)
+# gnuplot-nox and python3-numpy: the validation study (scripts/validate.sh) and its CTest subset.
+PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev gnuplot-nox python3-numpy)
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -44,8 +44,8 @@ def collapse_jobs(quick):
         n2, n3 = 10, 6
     else:
         a2 = [0.5, 1, 2, 3, 4, 6, 8]
-        a3 = [0.5, 1, 2, 4, 8]
-        n2, n3 = 16, 10
+        a3 = [0.5, 1, 2, 4]
+        n2, n3 = 12, 8
     fit_a2 = [a for a in a2 if a in (0.5, 1, 2, 4, 8)]
     fit_a3 = [a for a in a3 if a in (0.5, 1, 2, 4)]
     for fit in FITS:
@@ -55,12 +55,12 @@ def collapse_jobs(quick):
             jobs.append(job("collapse3d", f"c3_{fit}_a{a}", "collapse3d.lua", a=a, n=n3, fit=fit))
     # base condition: Coulomb base (mu = 0.5) instead of sticky
     for fit in (FITS[0], FITS[3]):
-        for a in fit_a2:
+        for a in (0.5, 2, 8):
             jobs.append(job("base2d", f"c2_{fit}_friction_a{a}", "collapse2d.lua", a=a, n=n2, fit=fit,
                             base="friction", base_mu=0.5))
     # convergence at a = 2 (2D): resolution, particles per cell, kernel, transfer; departures
     ref = dict(a=2, n=n2, fit=FITS[0])
-    ns = [6, 10, 14] if quick else [8, 16, 32]
+    ns = [6, 10, 14] if quick else [6, 12, 24]
     for n in ns:
         jobs.append(job("conv2d", f"c2_conv_n{n}", "collapse2d.lua", **dict(ref, n=n)))
     variants = [("ppc16", dict(ppc=16)), ("cubic", dict(kernel="cubic")), ("pic", dict(transfer="pic")),
@@ -68,26 +68,35 @@ def collapse_jobs(quick):
                 ("nosticks", dict(sticks=False))]
     for tag, extra in variants:
         jobs.append(job("conv2d", f"c2_conv_{tag}", "collapse2d.lua", **dict(ref, **extra)))
-    n3s = [4, 6, 8] if quick else [6, 10, 14]
+    n3s = [4, 6, 8] if quick else [5, 8, 11]
     for n in n3s:
         jobs.append(job("conv3d", f"c3_conv_n{n}", "collapse3d.lua", a=2, n=n, fit=FITS[0]))
     return jobs
 
 
 def pile_jobs(quick):
-    """Repose angle of poured piles (validation/scenes/pile.lua) and the experiments on it."""
+    """Repose angle of poured piles (validation/scenes/pile.lua), heaps let go (heap.lua), and the
+    experiments on the poured pile, one change at a time."""
     jobs = []
-    n = 3 if quick else 4
-    for dim in (2, 3):
-        for fit in (FITS[0], FITS[3]):
-            for phi in ((30,) if quick or dim == 3 else (20, 30, 40)):
-                jobs.append(job("pile", f"pile{dim}_{fit}_phi{phi}", "pile.lua", dim=dim, fit=fit, phi=phi, n=n))
-    # why the thesis's pile is flat: one thing changed at a time (3D, phi 30, the thesis's fit)
-    base = dict(dim=3, fit=FITS[0], phi=30, n=n)
-    for tag, extra in [("fine", dict(n=6 if not quick else 4)), ("slow", dict(speed=0.1, drop=0.02)),
-                       ("noproj", dict(projection=False)), ("nosticks", dict(sticks=False)),
-                       ("pic", dict(transfer="pic")), ("slipbase", dict(base="friction", base_mu=0.7))]:
+    n2, n3 = (2, 2) if quick else (4, 3)
+    for fit in (FITS[0], FITS[3]):
+        for phi in ((30,) if quick else (20, 30, 40)):
+            jobs.append(job("pile", f"pile2_{fit}_phi{phi}", "pile.lua", dim=2, fit=fit, phi=phi, n=n2))
+        jobs.append(job("pile", f"pile3_{fit}_phi30", "pile.lua", dim=3, fit=fit, phi=30, n=n3))
+    # why the thesis's pile is flat (3D, phi 30, the thesis's fit)
+    base = dict(dim=3, fit=FITS[0], phi=30, n=n3)
+    for tag, extra in [("fine", dict(n=n3 + 1)), ("slow", dict(speed=0.1, drop=0.025)),
+                       ("noproj", dict(projection=False)), ("pic", dict(transfer="pic")),
+                       ("slipbase", dict(base="friction", base_mu=0.7))]:
         jobs.append(job("pilexp", f"pile3_exp_{tag}", "pile.lua", **dict(base, **extra)))
+    # 2D: the poured pile at three resolutions, and a heap let go from 45 degrees (no stream)
+    for nn in ((1, 2, 3) if quick else (2, 4, 6)):
+        jobs.append(job("pilexp", f"pile2_exp_n{nn}", "pile.lua", dim=2, fit=FITS[0], phi=30, n=nn))
+        jobs.append(job("heap", f"heap2_n{nn}", "heap.lua", fit=FITS[0], phi=30, n=nn))
+    hn = 2 if quick else 4
+    for tag, extra in [("ss", dict(fit=FITS[3])), ("noproj", dict(projection=False)), ("pic", dict(transfer="pic")),
+                       ("slope35", dict(slope=35)), ("friction", dict(base="friction", base_mu=0.7))]:
+        jobs.append(job("heap", f"heap2_{tag}", "heap.lua", **dict(dict(fit=FITS[0], phi=30, n=hn), **extra)))
     return jobs
 
 
@@ -163,7 +172,7 @@ def analyse_pile(j, root):
     last = frames(out)[-1]
     p = deposit.read_ply(os.path.join(out, last))
     s = j["sets"]
-    dim = s["dim"]
+    dim = s.get("dim", 2 if j["scene"] == "heap.lua" else 3)
     dx = pile_dx(s)
     ppc = s.get("ppc", 8 if dim == 3 else 4)
     ang = deposit.flank_angle(p, dx, ppc, axisymmetric=(dim == 3))
@@ -247,6 +256,8 @@ def cost_guess(j):
         return a ** 1.5 * n ** 4 * 8
     if j["scene"] == "collapse2d.lua":
         return a ** 1.5 * n ** 3 * s.get("ppc", 4)
+    if j["scene"] == "heap.lua":
+        return 3e3 * n ** 3
     return 1e7 * n ** 4 / 1296.0 * (3 if s.get("dim") == 3 else 0.3)
 
 

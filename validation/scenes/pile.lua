@@ -1,7 +1,7 @@
 -- A pile poured from a spout onto a sticky plate (the thesis's pile-from-spout scene, §4.1.2,
 -- made small enough to repeat): sand leaves a spout of half-width 4 mm, `drop` above the plate,
 -- downward at `speed`, at 20 g/s in 3D for `pour` seconds, then rests for `rest` seconds. 3D
--- simulates the quarter x, z >= 0 (slip symmetry planes, 5 g/s); 2D the half x >= 0 (0.5 kg/(m s)).
+-- simulates the quarter x, z >= 0 (slip symmetry planes, 5 g/s); 2D the half x >= 0 (2 kg/(m s)).
 -- Parameters (--set KEY=VALUE):
 --   dim 3 | 2;  n: cells per 6 mm (default 4: dx = 1.5 mm, the issue's measurement);  ppc (8 / 4)
 --   phi (30), fit (triaxial_compression), repose (instead of phi: repose_angle, degrees)
@@ -20,7 +20,7 @@ local rs = 0.004
 local sand = { model = "sand", density = 2200, E = 3.537e5, nu = 0.3, cone_fit = P.fit or "triaxial_compression" }
 if P.repose then sand.repose_angle = P.repose else sand.friction_angle = P.phi or 30 end
 local ground, spout, colliders, dmin, dmax
-local width = 0.06
+local width = dim == 3 and 0.06 or 0.1
 if dim == 3 then
   ground = { shape = { type = "halfspace", point = {0, 0, 0}, normal = {0, 1, 0} } }
   spout = { type = "box", center = {rs / 2, drop, rs / 2}, half_extent = {rs / 2, 0.002, rs / 2} }
@@ -45,7 +45,7 @@ return {
   fps = 10, end_time = pour + rest,
   domain = { min = dmin, max = dmax },
   materials = { sand = sand },
-  emitters = { { shape = spout, velocity = v, rate = dim == 3 and 0.005 or 0.5, start = 0, stop = pour } },
+  emitters = { { shape = spout, velocity = v, rate = dim == 3 and 0.005 or 2.0, start = 0, stop = pour } },
   colliders = colliders,
   outputs = { ply = true, vtk = false, csv = true },
 }

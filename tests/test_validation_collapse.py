@@ -37,7 +37,7 @@ def check(ok, what):
 
 
 def run(scene, out, **sets):
-    cmd = [BIN, "run", os.path.join(SRC, "validation", "scenes", scene), "--out", out]
+    cmd = [BIN, "run", os.path.join(SRC, "validation", "scenes", scene), "--threads", "1", "--out", out]
     for k, v in sets.items():
         cmd += ["--set", f"{k}={v}"]
     r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)

@@ -76,22 +76,25 @@ def collapse_jobs(quick):
 
 def pile_jobs(quick):
     """Repose angle of poured piles (validation/scenes/pile.lua), heaps let go (heap.lua), and the
-    experiments on the poured pile, one change at a time."""
+    experiments on the poured pile, one change at a time (n = cells per 6 mm)."""
     jobs = []
-    n2, n3 = (2, 2) if quick else (4, 3)
+    n2, n3 = (2, 1) if quick else (4, 2)
+    for phi in ((30,) if quick else (20, 30, 40)):
+        jobs.append(job("pile", f"pile2_{FITS[0]}_phi{phi}", "pile.lua", dim=2, fit=FITS[0], phi=phi, n=n2))
     for fit in (FITS[0], FITS[3]):
-        for phi in ((30,) if quick else (20, 30, 40)):
-            jobs.append(job("pile", f"pile2_{fit}_phi{phi}", "pile.lua", dim=2, fit=fit, phi=phi, n=n2))
+        if fit != FITS[0]:
+            jobs.append(job("pile", f"pile2_{fit}_phi30", "pile.lua", dim=2, fit=fit, phi=30, n=n2))
         jobs.append(job("pile", f"pile3_{fit}_phi30", "pile.lua", dim=3, fit=fit, phi=30, n=n3))
     # why the thesis's pile is flat (3D, phi 30, the thesis's fit)
     base = dict(dim=3, fit=FITS[0], phi=30, n=n3)
-    for tag, extra in [("fine", dict(n=n3 + 1)), ("slow", dict(speed=0.1, drop=0.025)),
+    for tag, extra in [("finer", dict(n=n3 + 1)), ("slow", dict(speed=0.1, drop=0.025)),
                        ("noproj", dict(projection=False)), ("pic", dict(transfer="pic")),
                        ("slipbase", dict(base="friction", base_mu=0.7))]:
         jobs.append(job("pilexp", f"pile3_exp_{tag}", "pile.lua", **dict(base, **extra)))
-    # 2D: the poured pile at three resolutions, and a heap let go from 45 degrees (no stream)
-    for nn in ((1, 2, 3) if quick else (2, 4, 6)):
+    # 2D: the poured pile at two more resolutions, and a heap let go from 45 degrees (no stream)
+    for nn in ((1, 3) if quick else (2, 6)):
         jobs.append(job("pilexp", f"pile2_exp_n{nn}", "pile.lua", dim=2, fit=FITS[0], phi=30, n=nn))
+    for nn in ((1, 2, 3) if quick else (2, 4, 8)):
         jobs.append(job("heap", f"heap2_n{nn}", "heap.lua", fit=FITS[0], phi=30, n=nn))
     hn = 2 if quick else 4
     for tag, extra in [("ss", dict(fit=FITS[3])), ("noproj", dict(projection=False)), ("pic", dict(transfer="pic")),

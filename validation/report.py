@@ -191,6 +191,7 @@ def plot_column(res, pdir):
     rows = res.get("analytic", {}).get("column", [])
     if not rows:
         return None
+    rows = [r for r in rows if r["walls"] == "shifted"]
     write_dat(os.path.join(pdir, "column.dat"), rows, [lambda r: r["dx"], lambda r: r["err_syy"], lambda r: r["err_ratio"]])
     gnuplot("""set terminal pngcairo size 460,360 font ',9'
 set output 'column.png'

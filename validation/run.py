@@ -188,15 +188,25 @@ def pile_dx(s):
     return 0.006 / s.get("n", 4)
 
 
-def run_analytic(binary, quick):
-    """sm_validate subcommands; each prints CSV with a header line."""
+def run_analytic(binary, quick, root):
+    """sm_validate subcommands; each prints CSV with a header line, kept in ROOT/analytic_SUB.csv
+    (reused while the command and the binary are unchanged)."""
     res = {}
     for sub in ["incline", "column", "shear"]:
         args = [binary, sub] + (["--quick"] if quick else [])
-        r = subprocess.run(args, capture_output=True, text=True)
-        if r.returncode != 0:
-            raise RuntimeError(f"sm_validate {sub}: exit {r.returncode}: {r.stderr[-800:]}")
-        lines = [line for line in r.stdout.splitlines() if line and not line.startswith("#")]
+        path = os.path.join(root, f"analytic_{sub}.csv")
+        key = shlex.join(args) + f" {os.path.getmtime(binary):.0f}\n"
+        if os.path.exists(path) and open(path).readline() == key:
+            text = open(path).read().split("\n", 1)[1]
+        else:
+            r = subprocess.run(args, capture_output=True, text=True)
+            if r.returncode != 0:
+                raise RuntimeError(f"sm_validate {sub}: exit {r.returncode}: {r.stderr[-800:]}")
+            text = r.stdout
+            with open(path, "w") as f:
+                f.write(key + text)
+            print(f"sm_validate {sub}: done", flush=True)
+        lines = [line for line in text.splitlines() if line and not line.startswith("#")]
         head = lines[0].split(",")
         rows = []
         for line in lines[1:]:
@@ -222,9 +232,13 @@ def main():
     ap.add_argument("--out", default="out/validation")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--only", default="")
+    ap.add_argument("--analytic-only", action="store_true", help="only the sm_validate benchmarks (cached)")
     args = ap.parse_args()
     root = os.path.join(args.out, "quick" if args.quick else "full")
     os.makedirs(os.path.join(root, "runs"), exist_ok=True)
+    if args.analytic_only:
+        run_analytic(args.analytic, args.quick, root)
+        return
     jobs = collapse_jobs(args.quick) + pile_jobs(args.quick)
     if args.only:
         keep = set(args.only.split(","))
@@ -244,7 +258,7 @@ def main():
         else:
             results["pile"][j["name"]] = dict(analyse_pile(j, root), group=j["group"])
     if not args.only:
-        results["analytic"] = run_analytic(args.analytic, args.quick)
+        results["analytic"] = run_analytic(args.analytic, args.quick, root)
     results["wall_seconds"] = time.time() - t0
     with open(os.path.join(root, "results.json"), "w") as f:
         json.dump(results, f, indent=1)

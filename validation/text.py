@@ -273,38 +273,56 @@ def analytic(c):
     res, T = c["res"], c["table"]
     an = res.get("analytic", {})
     inc = an.get("incline", [])
-    irows = [[int(r["dim"]), r["setup"], f"{r['theta']:g}", f"{r['mu']:g}", f"{r['max_dt']:g}", f"{r['expected']:.4f}",
-              f"{r['measured']:.4f}", f"{r['rel_error']:.2e}"] for r in inc]
+    irows = [[int(r["dim"]), r["setup"], r["mode"], f"{r['theta']:g}", f"{r['mu']:g}", f"{r['max_dt']:g}",
+              f"{r['expected']:.4f}", f"{r['measured']:.4f}", f"{r['rel_error']:.2e}"] for r in inc]
     col = an.get("column", [])
-    crows = [[int(r["cells"]), int(r["particles"]), f"{r['err_syy']:.3e}", f"{r['ratio_mean']:.4f}", f"{r['ratio_exact']:.4f}",
-              f"{r['err_ratio']:.3e}", int(r["newton_unconverged"])] for r in col]
-    order = ""
-    if len(col) >= 2:
-        o = [math.log(col[i]["err_syy"] / col[i + 1]["err_syy"]) / math.log(col[i]["dx"] / col[i + 1]["dx"])
-             for i in range(len(col) - 1)]
-        o2 = [math.log(col[i]["err_ratio"] / col[i + 1]["err_ratio"]) / math.log(col[i]["dx"] / col[i + 1]["dx"])
-              for i in range(len(col) - 1)]
-        order = ("Observed order of convergence of the σ_yy error between successive resolutions: " +
-                 ", ".join(f"{x:.2f}" for x in o) + "; of the ratio error: " + ", ".join(f"{x:.2f}" for x in o2) + ".")
-    colfig = f"\n![elastic column: error against dx]({c['figs']['column']})\n" if "column" in c["figs"] else ""
+    crows = [[r["walls"].replace("_", " "), int(r["cells"]), int(r["particles"]), f"{r['err_syy']:.3e}",
+              f"{r['ratio_mean']:.4f}", f"{r['ratio_exact']:.4f}", f"{r['err_ratio']:.3e}"] for r in col]
+    orders = []
+    for walls in ("shifted", "on_grid_lines"):
+        cw = [r for r in col if r["walls"] == walls]
+        if len(cw) >= 2:
+            o = [math.log(cw[i]["err_syy"] / cw[i + 1]["err_syy"]) / math.log(cw[i]["dx"] / cw[i + 1]["dx"])
+                 for i in range(len(cw) - 1)]
+            o2 = [math.log(cw[i]["err_ratio"] / cw[i + 1]["err_ratio"]) / math.log(cw[i]["dx"] / cw[i + 1]["dx"])
+                  for i in range(len(cw) - 1)]
+            orders.append(f"walls {walls.replace('_', ' ')}: order of the σ_yy error between successive resolutions "
+                          + ", ".join(f"{x:.2f}" for x in o) + "; of the ratio error " + ", ".join(f"{x:.2f}" for x in o2))
+    colfig = f"\n![elastic column: error against dx (walls shifted)]({c['figs']['column']})\n" if "column" in c["figs"] else ""
     return f"""## 6. Analytic benchmarks
 
 **Block on an incline** (`sm_validate incline`): an elastic block on a Coulomb plane (thesis §3.6.3),
 acceleration along the slope fitted over [0.05 s, end], against g (sin θ − μ cos θ) (0 when
 tan θ ≤ μ; the error is then the measured acceleration over g). "tilted": the plane turned in the grid
-(not grid aligned), "aligned": the plane on grid lines and gravity turned.
+(not grid aligned), "aligned": the plane on grid lines and gravity turned. Collider mode "separate"
+(unilateral contact), and "slip" (the normal velocity of nodes inside is removed both ways) for two
+cases.
 
-{T(["d", "set-up", "θ (°)", "μ", "max Δt (s)", "expected (m/s²)", "measured", "rel. error"], irows)}
+{T(["d", "set-up", "mode", "θ (°)", "μ", "max Δt (s)", "expected (m/s²)", "measured", "rel. error"], irows)}
 
 **Gravity-loaded elastic column** (`sm_validate column`): 2D plane strain, H = 1 m, width H/4 between
-slip walls on a slip base, ρ 1000, E 1e7, ν 0.3, brought to rest by the implicit integrator
-(Δt = 5 ms). Exact: σ_yy = −ρ g (H − y), σ_xx/σ_yy = ν/(1 − ν) = 0.4286. Stress per particle from
-its Fᴱ (Hencky, (3.70), Cauchy = τ/J); RMS errors over the particles (the ratio over y < 0.8 H):
+slip walls on a slip base, ρ 1000, E 1e7, ν 0.3, released stress free; the stress is averaged over 8
+periods of the column's oscillation (the average of a linear oscillation over whole periods is the
+equilibrium). Exact: σ_yy = −ρ g (H − y), σ_xx/σ_yy = ν/(1 − ν) = 0.4286. Stress per particle from its
+Fᴱ (Hencky, (3.70), Cauchy = τ/J), averaged in bins of dx in y; RMS errors over the bins (the ratio
+below 0.8 H). Run twice: walls exactly on grid lines (x = 0, x = W, y = 0), and moved 1e-6 dx into
+the column ("shifted"):
 
-{T(["cells over H", "particles", "σ_yy error", "σ_xx/σ_yy (mean)", "exact", "ratio error", "unconverged Newton steps"], crows)}
+{T(["walls", "cells over H", "particles", "σ_yy error", "σ_xx/σ_yy (mean)", "exact", "ratio error"], crows)}
 
-{order}
+""" + "\n".join(f"- {o}." for o in orders) + f"""
 {colfig}
+**Finding: a slip collider does not hold grid nodes that lie exactly on its surface.** In
+src/collide/collide.c a slip collider acts on nodes with φ < 0 (strictly; a separating one on nodes
+whose predicted φ̂ is below a rounding tolerance, a sticky one likewise). A wall on a grid line
+therefore leaves the nodes on it free, and the material's boundary nodes are those: the column on
+walls on grid lines spreads sideways in Fᴱ (σ_xx/σ_yy far below ν/(1 − ν)) and its base sinks, while
+the same walls moved 1e-6 dx into the column give the uniaxial state. Every grid-aligned slip wall
+in a scene is affected — here the back wall of the 2D collapses and the symmetry planes of the 3D
+quarter columns and piles (x = 0, z = 0) — by an amount these runs do not measure. Not changed in this
+work (it changes the results of every such scene, and src/collide belongs to the core): a fix is to
+treat φ0 ≤ 0 (or φ̂ below the tolerance, as for separating contact) as contact for slip too.
+
 **Triaxial compression stress path** (tests/test_cone_fit.c, a unit test of the material functions):
 along σ = −(r c, c, c) the thesis's cone is first reached at r = (1 + sin φ)/(1 − sin φ), Mohr–Coulomb's
 ratio, for φ = 15°…45° (bisection on sm_dp_yield of the Hencky strains of those stresses); along the
@@ -326,6 +344,33 @@ def pile_finding(c):
         rows.append([name, ", ".join(f"{k}={x}" for k, x in sorted(s.items()) if k not in ("fit",)),
                      f"{v['angle']:.1f}", f"{v['peak'] * 1000:.1f}", f"{v['front'] * 1000:.1f}"])
     ref3 = piles.get("pile3_triaxial_compression_phi30")
+    ang = lambda k: piles[k]["angle"] if k in piles else float("nan")  # noqa: E731
+    b3 = ang("pile3_triaxial_compression_phi30")
+    finding = f"""
+What the runs say (3D numbers against the 3D base run, {b3:.1f}°):
+
+- **Resolution** is a large part: one step finer (pile3_exp_finer) stands at {ang("pile3_exp_finer"):.1f}°; the 2D
+  pile goes {ang("pile2_exp_n2"):.1f}° → {ang("pile2_triaxial_compression_phi30"):.1f}° → {ang("pile2_exp_n6"):.1f}° for n = 2, 4, 6.
+  The flank of a pile a few cells high is mostly the one or two cells next to the free surface, where
+  the kernel's support reaches outside the material, the pressure is not resolved and the sand yields
+  at lower slopes than the continuum would.
+- **The stream's impact** is the other: the same pile poured at 0.1 m/s from 2.5 cm (pile3_exp_slow)
+  stands at {ang("pile3_exp_slow"):.1f}°. At 0.5 m/s from 4 cm the grains arrive at about 1 m/s and keep
+  the top of the pile flowing.
+- **Not the departures from the thesis**: without particle projection {ang("pile3_exp_noproj"):.1f}°; on a
+  Coulomb plate (μ = 0.7) instead of the sticky one {ang("pile3_exp_slipbase"):.1f}°.
+- **Numerical dissipation** (PIC instead of APIC): {ang("pile3_exp_pic"):.1f}°.
+- **Even without a stream** a 2D heap built at 45° and let go settles at {ang("heap2_n4"):.1f}° (n = 4; n = 2, 8:
+  {ang("heap2_n2"):.1f}°, {ang("heap2_n8"):.1f}°), below atan μ_eff = 24.8° of 2D sand with φ_F = 30°: the flank
+  avalanches and overshoots, as a rate-independent material without a static/dynamic friction
+  difference must. From 35° it settles at {ang("heap2_slope35"):.1f}°; with the simple-shear fit
+  (μ_eff = tan 30°) at {ang("heap2_ss"):.1f}°.
+
+So the flat pile is not a bug: it is the resolution of the flank and the stream's momentum, on top
+of a yield surface whose flowing friction μ_eff sets the angle sand keeps only while it flows. The
+collapses stand "too steep" in 3D for the other reason of section 3: the thesis's cone in 3D has
+μ_eff = 0.693 for φ_F = 30°.
+"""
     return f"""## 7. Why the poured pile is flatter than the input angle
 
 Issue 13 measured a pile poured from a spout (3D, φ_F = 30°, sticky plate, 20 g/s at 0.5 m/s, dx 1.5 mm)
@@ -335,7 +380,7 @@ steep. Targeted runs, one thing changed at a time (pile3_exp_*: 3D, thesis fit, 
 resolutions; heap2_*: a 2D wedge built at 45° (or 35°) at rest and let go, no stream):
 
 {T(["run", "parameters", "flank angle (°)", "peak (mm)", "front (mm)"], rows)}
-"""
+""" + finding
 
 
 def convergence(c):

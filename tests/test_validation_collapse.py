@@ -6,13 +6,14 @@ test_validation_collapse.py SANDMPM SOURCE_DIR
    with the thesis's cone fit and with the simple-shear fit; the normalised runout (L∞ − L0)/L0,
    measured as validation/deposit.py defines it, must lie within a stated band around the law of
    Lube et al. 2005 (1.2 a below a = 2.3, 1.9 a^(2/3) above), as a ratio simulated/law:
-     thesis fit (triaxial compression): [1.10, 1.90]  — it runs out too far in 2D (μ_eff = 0.462);
-     simple-shear fit:                   [0.75, 1.30]  — μ_eff = tan 30°, close to the experiments;
+     thesis fit (triaxial compression): [1.00, 2.00]  — it runs out too far in 2D (mu_eff = 0.462);
+     simple-shear fit:                   [0.70, 1.35]  — mu_eff = tan 30 deg, close to the experiments;
    and the simple-shear fit must run out less than the thesis's fit at both a.
-   The bands: the full study at L0/dx = 12 measures ratios of 1.3–1.5 (thesis fit) and 0.9–1.1
-   (simple shear) at these a, and the coarse runs here move them by up to ~0.1 (the resolution
-   study of docs/validation.md); the margin is ±0.3 around that, narrow enough that a change of the
-   effective friction by ~15% (e.g. the 2D cone losing its d = 2 traces) leaves the band.
+   The bands: measured here (L0/dx = 8) 1.15 and 1.45 (thesis fit, a = 2 and 8) and 0.88 and 1.10
+   (simple shear); the full study (L0/dx = 12, docs/validation.md) gives 1.35 and 1.65, and 1.03 and
+   1.12. The bands hold both resolutions with a margin of at least 0.15, which also covers the
+   float and double builds taking different paths through the same flow; the runout grows with resolution (docs/validation.md, section 8), so the
+   bands are for this resolution, not statements about converged runouts.
 2. repose_angle reaches the library through the loader: a 2D pile with repose_angle = 30 and each
    cone fit has particles whose friction angle (PLY) is the fit's inverse of mu_eff = tan 30°; a
    repose angle the fit cannot reach (plane strain, 50°) is refused with exit code 2.
@@ -50,7 +51,7 @@ def lube2005(a):
     return 1.2 * a if a < 2.3 else 1.9 * a ** (2 / 3)
 
 
-BANDS = {"triaxial_compression": (1.10, 1.90), "simple_shear": (0.75, 1.30)}
+BANDS = {"triaxial_compression": (1.00, 2.00), "simple_shear": (0.70, 1.35)}
 N = 8
 with tempfile.TemporaryDirectory() as tmp:
     runout = {}

@@ -34,10 +34,6 @@ def lube2004_runout(a):
     return 1.24 * a if a < 1.7 else 1.6 * a ** 0.5
 
 
-def lajeunesse2004_runout(a):
-    return 1.0 * a if a < 0.74 else 2.0 * a ** 0.5
-
-
 def lube2005_height(a):
     # H/L0 = a while the top is intact (a <~ 1.15, the column's top survives), a^0.4 for large a
     return a if a < 1.0 else a ** 0.4
@@ -118,6 +114,9 @@ def plot_collapse(res, dim, pdir):
         laws = ("(x<1.7 ? 1.24*x : 1.6*x**0.5)", "(x<0.74 ? 1.0*x : 2.0*x**0.5)")
         hlaw = None
         lab = ("Lube et al. 2004", "Lajeunesse et al. 2004", "(R_∞ - R_0)/R_0", "H_∞/R_0")
+    lawplot = f"{laws[0]} w l lw 2 lc rgb 'black' t '{lab[0]}'"
+    if dim == 2:
+        lawplot += f", {laws[1]} w l lw 2 dt 2 lc rgb 'black' t '{lab[1]}'"
     pts = ", ".join(f"'c{dim}_{f}.dat' u 1:2 w lp pt {7 + i} lc {i + 1} t '{FIT_LABEL[f]}'" for i, f in enumerate(plots))
     hpts = ", ".join(f"'c{dim}_{f}.dat' u 1:3 w lp pt {7 + i} lc {i + 1} t '{FIT_LABEL[f]}'" for i, f in enumerate(plots))
     href = f", {hlaw} w l lw 2 dt 1 lc rgb 'black' t 'Lube et al. 2005'" if hlaw else \
@@ -132,8 +131,9 @@ set key top left
 set grid
 set ylabel '{lab[2]}'
 set xrange [0.4:10]
-plot {laws[0]} w l lw 2 lc rgb 'black' t '{lab[0]}', {laws[1]} w l lw 2 dt 2 lc rgb 'black' t '{lab[1]}', {pts}
+plot {lawplot}, {pts}
 set ylabel '{lab[3]}'
+set yrange [0.3:3]
 plot {hpts}{href}
 unset multiplot
 """, pdir)
@@ -180,6 +180,7 @@ set output 'profiles2d.png'
 set xlabel 'x / L_0'
 set ylabel 'y / L_0'
 set size ratio -1
+set yrange [0:2.1]
 set grid
 set object 1 rect from 0,0 to 1,2 fs empty border lc rgb 'gray'
 plot {', '.join(cmds)}
@@ -230,8 +231,7 @@ def main():
             os.remove(os.path.join(pdir, f))
     ctx = dict(res=res, figs={k: f"{rel}/{v}" for k, v in figs.items() if v}, table=table, fmt=fmt,
                collapse_rows=collapse_rows, deviation=deviation, mean_ratio=mean_ratio, fits_of=fits_of,
-               laws=dict(lube2005=lube2005_runout, lajeunesse2005=lajeunesse2005_runout, lube2004=lube2004_runout,
-                         lajeunesse2004=lajeunesse2004_runout, lube2005_height=lube2005_height),
+               laws=dict(lube2005=lube2005_runout, lajeunesse2005=lajeunesse2005_runout, lube2004=lube2004_runout, lube2005_height=lube2005_height),
                FITS=FITS, FIT_LABEL=FIT_LABEL)
     md = text.document(ctx)
     with open(doc, "w") as f:

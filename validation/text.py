@@ -6,7 +6,8 @@ REFERENCES = """## References and where the constants come from
 
 - Lube, Huppert, Sparks, Freundt 2005, *Collapses of two-dimensional granular columns*, Phys. Rev. E 72,
   041301: (L∞ − L0)/L0 ≈ 1.2 a for small a and ≈ 1.9 a^(2/3) beyond (the transition near a ≈ 1.8–2.8;
-  2.3 is used here); H∞/L0 ≈ a^0.4 for large a (a below ~1: the top of the column survives, H∞ = H0).
+  2.3 is used here); H∞/L0 ≈ a^0.4 for large a. Below a ≈ 1 the top of the column survives and
+  H∞ = H0; the plotted height law switches from a to a^0.4 at a = 1 (that break is this document's).
 - Lajeunesse, Monnier, Homsy 2005, *Granular slumping on a horizontal surface*, Phys. Fluids 17,
   103302: (L∞ − L0)/L0 ≈ 1.8 a below a ≈ 3 and ≈ 2.3 a^(2/3) above.
 - Balmforth, Kerswell 2005, *Granular collapse in two dimensions*, J. Fluid Mech. 538, 399: exponents
@@ -107,7 +108,8 @@ Deposits at a = 2 (every fit; the grey box is the initial column):
 
 ![2D deposits at a = 2]({c['figs']['prof']})
 
-Flow duration against √(H0/g) (Lube et al. 2005 report the front stopping after about 3 √(H0/g)):
+Flow duration against √(H0/g); the line t = 3 √(H0/g) is drawn as the scale of the flow durations
+commonly quoted for the experiments (not checked against the papers here):
 
 ![flow duration]({c['figs']['tflow']})
 """
@@ -315,6 +317,16 @@ cases.
 
 {T(["d", "set-up", "mode", "θ (°)", "μ", "max Δt (s)", "expected (m/s²)", "measured", "rel. error"], irows)}
 
+{sum(abs(r["rel_error"]) <= 1e-3 for r in inc)} of {len(inc)} cases are within 1e-3. Beyond it:
+{"; ".join(f"{r['setup']} {r['mode']} θ {r['theta']:g}° μ {r['mu']:g} ({r['rel_error']:+.2e})" for r in inc if abs(r["rel_error"]) > 1e-3) or "none"}.
+The failures are near or beyond the sliding threshold (tan 30° = 0.577): there the grid's Coulomb
+friction delivers less than μ times the normal force, so a block that should slide slowly slides
+too fast, and on the tilted (not grid aligned) separating plane a block that should stay (μ = 0.7)
+creeps (tests/test_incline.c holds that case on a slip plane). Why is not established here; a
+candidate is the normal support that reaches the block through grid nodes the contact test does not
+count (a separating contact counts a node only while its predicted φ̂ is below a tolerance), which
+carries no friction. Documented, not changed.
+
 **Gravity-loaded elastic column** (`sm_validate column`): 2D plane strain, H = 1 m, width H/4 between
 slip walls on a slip base, ρ 1000, E 1e7, ν 0.3, released stress free; the stress is averaged over 8
 periods of the column's oscillation (the average of a linear oscillation over whole periods is the
@@ -326,6 +338,13 @@ the column ("shifted"):
 {T(["walls", "cells over H", "particles", "σ_yy error", "σ_xx/σ_yy (mean)", "exact", "ratio error"], crows)}
 
 """ + "\n".join(f"- {o}." for o in orders) + f"""
+
+With the walls shifted the stress ratio is right to about 2% but the σ_yy error levels off at a few
+per cent instead of falling with dx, so no order of convergence of the method can be read from it.
+What limits it is not established here; candidates are the time average (APIC damps the oscillation a
+little, so the average over 8 periods is not exactly the equilibrium), the rows of particles at the
+free top and at the base, where the kernel reaches outside the material, and the finite strain
+(below 1e-3). With the walls on grid lines the errors are tens of per cent (the finding below).
 {colfig}
 **Finding: a slip collider does not hold grid nodes that lie exactly on its surface.** In
 src/collide/collide.c a slip collider acts on nodes with φ < 0 (strictly; a separating one on nodes

@@ -15,7 +15,9 @@
  *   static_friction_sticks = bool   particle_projection = bool
  *   domain = { min = {..}, max = {..}, walls = "sticky" | "slip" | "separate", wall_friction = mu }
  *   materials = { NAME = { model = "sand" | "elastic" ("sand"), density, E, nu,
- *                          friction_angle = degrees | hardening = {h0, h1, h2, h3} (sand: exactly one) } }
+ *                          friction_angle = degrees | repose_angle = degrees | hardening = {h0, h1, h2, h3}
+ *                          (sand: exactly one), cone_fit = "triaxial_compression" | "plane_strain" |
+ *                          "inscribed" | "simple_shear" } }
  *   shape = { type = "box", center, half_extent | size, rotation | axis_angle }
  *         | { type = "sphere", center, radius }
  *         | { type = "cylinder", center, radius, half_height | height, rotation | axis_angle }

@@ -250,8 +250,8 @@ int main(int argc, char **argv) {
     double E = 3.537e5, nu = 0.3, mu, lambda;
     sm_lame(E, nu, &mu, &lambda);
     mat_t mats[2] = {{(sm_real)mu, (sm_real)lambda, (sm_real)(35 * deg), (sm_real)(9 * deg), (sm_real)0.2,
-                      (sm_real)(10 * deg), 1, 1},
-                     {(sm_real)mu, (sm_real)lambda, 0, 0, 0, 0, 0, 0}};
+                      (sm_real)(10 * deg), 1, 1, 0},
+                     {(sm_real)mu, (sm_real)lambda, 0, 0, 0, 0, 0, 0, 0}};
     const char *names[2] = {"hardening sand", "elastic"};
     for (int d = 3; d >= 2; d--)
         for (int mi = 0; mi < 2; mi++) {

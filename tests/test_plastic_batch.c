@@ -76,7 +76,7 @@ static int scalar_plastic(int D, const mat_t *m, sm_real *F, sm_real *alpha, sm_
             if (m->hardening && dq > 0) {
                 *q += dq;
                 double phi = sm_hardening_phi((double)*q, m->h0, m->h1, m->h2, m->h3);
-                *alpha = (sm_real)sm_dp_alpha(phi);
+                *alpha = (sm_real)sm_dp_alpha_fit(phi, m->fit, D);
             }
         }
     }
@@ -200,10 +200,15 @@ static void test_against_scalar(int D) {
     const double deg = SM_PI / 180;
     double mu, lambda;
     sm_lame(3.537e5, 0.3, &mu, &lambda);
-    mat_t mats[3] = {
-        {(sm_real)mu, (sm_real)lambda, (sm_real)(35 * deg), (sm_real)(9 * deg), (sm_real)0.2, (sm_real)(10 * deg), 1, 1},
-        {(sm_real)mu, (sm_real)lambda, 0, 0, 0, 0, 1, 0}, /* fixed friction angle */
-        {(sm_real)mu, (sm_real)lambda, 0, 0, 0, 0, 0, 0}, /* elastic */
+    const sm_real h0 = (sm_real)(35 * deg), h1 = (sm_real)(9 * deg), h3 = (sm_real)(10 * deg);
+    mat_t mats[6] = {
+        {(sm_real)mu, (sm_real)lambda, h0, h1, (sm_real)0.2, h3, 1, 1, SM_CONE_TRIAXIAL_COMPRESSION},
+        {(sm_real)mu, (sm_real)lambda, 0, 0, 0, 0, 1, 0, 0}, /* fixed friction angle */
+        {(sm_real)mu, (sm_real)lambda, 0, 0, 0, 0, 0, 0, 0}, /* elastic */
+        /* hardening with the other cone fits (sm_cone_fit) */
+        {(sm_real)mu, (sm_real)lambda, h0, h1, (sm_real)0.2, h3, 1, 1, SM_CONE_PLANE_STRAIN},
+        {(sm_real)mu, (sm_real)lambda, h0, h1, (sm_real)0.2, h3, 1, 1, SM_CONE_INSCRIBED},
+        {(sm_real)mu, (sm_real)lambda, h0, h1, (sm_real)0.2, h3, 1, 1, SM_CONE_SIMPLE_SHEAR},
     };
     static sm_plastic_lanes b, b2;
     double wF = 0, wT = 0, wQ = 0, wA = 0;
@@ -214,7 +219,7 @@ static void test_against_scalar(int D) {
         double margin[L], cond[L];
         int mi[L], kase[L], cat[L];
         for (int l = 0; l < L; l++) {
-            mi[l] = (int)(urand(0, 3));
+            mi[l] = (int)(urand(0, 6));
             cat[l] = (int)urand(0, 7);
             make_F(D, cat[l], F[l]);
             as[l] = mats[mi[l]].plastic ? (sm_real)urand(0, 0.5) : 0;

@@ -125,7 +125,29 @@ static int shape_field(vctx *v, int t, const char *key, sm_shape *out) {
 }
 
 static const char *const mat_models[] = {"sand", "elastic"};
-static const char *const keys_mat[] = {"model", "density", "E", "nu", "friction_angle", "hardening"};
+static const char *const keys_mat[] = {"model", "density", "E", "nu", "friction_angle", "hardening", "cone_fit",
+                                       "repose_angle"};
+static const char *const cone_fits[] = {"triaxial_compression", "plane_strain", "inscribed", "simple_shear"};
+
+/* Material keys cone_fit (sm_cone_fit, by name) and repose_angle: the angle theta of steady flow,
+ * tan(theta) = mu_eff, turned into the friction angle of that fit in the scene's dimension
+ * (sm_friction_angle_for_effective_friction; docs/validation.md). Returns the friction angle, or
+ * -1 without repose_angle. */
+static double parse_cone_fit(vctx *v, int t, sm_material_def *m) {
+    m->cone_fit = (sm_cone_fit)sc_enum_field(v, t, "cone_fit", cone_fits, 4, 0);
+    int has;
+    double theta = sc_num_field(v, t, "repose_angle", 0, &has, 0.0, 1, 90.0, 0);
+    if (!has) return -1;
+    double phi = sm_friction_angle_for_effective_friction(tan(theta * 3.14159265358979323846 / 180), m->cone_fit,
+                                                          v->s->def.dim);
+    char a[32];
+    size_t old = sc_push_key(v, "repose_angle");
+    if (!(phi >= 0 && phi < 90))
+        sc_fail(v, "%s degrees is beyond cone_fit \"%s\" in %dD (no friction angle below 90 gives it)",
+                sc_fmt_num(a, theta), cone_fits[m->cone_fit], v->s->def.dim);
+    sc_pop_key(v, old);
+    return phi;
+}
 
 /* The library's limits on a material (sm_material_def_check), reported at the scene's key. */
 static void check_material_limits(vctx *v, const sm_material_def *m) {
@@ -150,13 +172,19 @@ static void parse_material(vctx *v, int t, sm_material_def *out) {
     int has_fa, has_h = sc_get(v, t, "hardening") != LUA_TNIL;
     lua_pop(v->L, 1);
     double fa = sc_num_field(v, t, "friction_angle", 0, &has_fa, SC_NOLIM);
+    double fa_repose = parse_cone_fit(v, t, &m);
+    if (fa_repose >= 0) {
+        if (has_fa || model == 1)
+            sc_fail(v, "repose_angle: %s", has_fa ? "give friction_angle or repose_angle, not both" : "only sand has one");
+        fa = fa_repose, has_fa = 1;
+    }
     if (model == 1) {
         if (has_fa || has_h)
             sc_fail(v, "an elastic material has no %s (only sand does)", has_fa ? "friction_angle" : "hardening");
     } else {
         if (has_fa && has_h) sc_fail(v, "give friction_angle or hardening, not both");
         if (!has_fa && !has_h)
-            sc_fail(v, "sand needs friction_angle = degrees or hardening = {h0, h1, h2, h3} (e.g. {35, 9, 0.2, 10})");
+            sc_fail(v, "sand needs friction_angle = degrees, repose_angle = degrees or hardening = {h0, h1, h2, h3} (e.g. {35, 9, 0.2, 10})");
         if (has_fa) {
             m.hardening = 0;
             m.friction_angle = fa;

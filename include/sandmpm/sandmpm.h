@@ -213,6 +213,25 @@ typedef enum sm_material_kind {
     SM_MATERIAL_ELASTIC = 1 /**< the same energy, no plasticity */
 } sm_material_kind;
 
+/** How the Drucker–Prager cone ||dev tau|| + alpha tr tau <= 0 is fitted to a Mohr–Coulomb friction
+ *  angle phi_F, i.e. the function alpha(phi_F, d). The plastic flow of the return mapping is
+ *  deviatoric (volume-preserving), so in steady simple shear the stress ratio on the shear plane is
+ *  mu_eff = 3 alpha / sqrt(2) in 3D and sqrt(2) alpha in 2D (d = 2 traces), whatever the fit
+ *  (derivation in docs/validation.md, "What the friction angle means"). */
+typedef enum sm_cone_fit {
+    SM_CONE_TRIAXIAL_COMPRESSION = 0, /**< the thesis (3.80), default: alpha = sqrt(2/3) 2 sin(phi)/(3 - sin(phi)),
+                                           the cone through Mohr–Coulomb's compression meridian (circumscribed);
+                                           the same alpha in 2D. mu_eff(30 deg) = 0.693 in 3D, 0.462 in 2D. */
+    SM_CONE_PLANE_STRAIN = 1,         /**< Mohr–Coulomb in plane strain with this (non-dilatant) flow:
+                                           mu_eff = sin(phi); alpha = sqrt(2) sin(phi)/3 in 3D, sin(phi)/sqrt(2) in 2D
+                                           (in 2D the cone is then exactly Mohr–Coulomb in the plane). */
+    SM_CONE_INSCRIBED = 2,            /**< the cone inscribed in the Mohr–Coulomb pyramid:
+                                           alpha = sqrt(2/3) sin(phi)/sqrt(3 + sin^2(phi)); the same alpha in 2D. */
+    SM_CONE_SIMPLE_SHEAR = 3          /**< steady simple shear flows at tau/sigma = tan(phi), the granular-physics
+                                           friction coefficient (repose angle of a flowing layer = phi):
+                                           alpha = sqrt(2) tan(phi)/3 in 3D, tan(phi)/sqrt(2) in 2D. */
+} sm_cone_fit;
+
 /** A material. Angles are in degrees, as in the thesis's Table 4.2. */
 typedef struct sm_material_def {
     sm_material_kind kind;
@@ -222,6 +241,8 @@ typedef struct sm_material_def {
     int hardening;           /**< sand: 1 = hardening with h0..h3 (3.78-3.80); 0 = fixed friction_angle */
     double friction_angle;   /**< sand without hardening: phi_F in degrees, [0, 90) */
     double h0, h1, h2, h3;   /**< hardening: phi_F = h0 + (h1 q - h3) exp(-h2 q); h0,h1,h3 degrees, h2 dimensionless */
+    sm_cone_fit cone_fit;    /**< sand: how alpha follows from phi_F (fixed or hardening). Default (0)
+                                  SM_CONE_TRIAXIAL_COMPRESSION, the thesis. */
 } sm_material_def;
 
 /** Sand as in most thesis scenes: rho 2200, E 3.537e5, nu 0.3, hardening 35/9/0.2/10. */
@@ -241,6 +262,18 @@ SM_API sm_status sm_world_add_material(sm_world *w, const sm_material_def *m, in
 SM_API double sm_hardening_friction_angle(const sm_material_def *m, double q);
 /** Drucker–Prager alpha for a friction angle in degrees (3.80): sqrt(2/3) 2 sin(phi)/(3 - sin(phi)). */
 SM_API double sm_alpha_from_friction_angle(double degrees);
+/** Drucker–Prager alpha for a friction angle in degrees, a cone fit and a dimension (2 or 3); what
+ *  the world uses. SM_CONE_TRIAXIAL_COMPRESSION gives sm_alpha_from_friction_angle. NaN for an
+ *  unknown fit or dim. */
+SM_API double sm_cone_alpha(double degrees, sm_cone_fit fit, int dim);
+/** Effective friction coefficient of steady simple shear, tau/sigma_n on the shear plane, for a
+ *  cone alpha in dimension dim: 3 alpha/sqrt(2) (3D), sqrt(2) alpha (2D). NaN for another dim. */
+SM_API double sm_effective_friction(double alpha, int dim);
+/** The friction angle phi_F (degrees) that gives steady simple shear the effective friction mu
+ *  (>= 0) with the cone fit `fit` in dimension dim: the inverse of sm_effective_friction(
+ *  sm_cone_alpha(phi, fit, dim), dim). A target repose angle theta is mu = tan(theta). NaN if no
+ *  phi_F in [0, 90) reaches mu with that fit (e.g. mu >= 1 with SM_CONE_PLANE_STRAIN). */
+SM_API double sm_friction_angle_for_effective_friction(double mu, sm_cone_fit fit, int dim);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Shapes: signed distance functions, negative inside.                                          */

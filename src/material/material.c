@@ -19,6 +19,16 @@
  *                (the square root covers only 2/3, as in Algorithm 2 line 9; the extracted text of
  *                (3.80) misplaces it)
  *
+ * Cone fits (sm_cone_fit; not in the thesis, which has only (3.80); derivation in
+ * docs/validation.md). With the deviatoric flow of case III, steady simple shear has
+ * dev tau parallel to the shear rate, so ||dev tau|| = sqrt(2) |tau_xy| and tr tau = -d p:
+ *   mu_eff = tau_xy / p = d alpha / sqrt(2)  (3D: 3 alpha/sqrt 2, 2D: sqrt(2) alpha)
+ * and, with s = sin(phi), c = sqrt(2/3):
+ *   triaxial compression (3.80)  alpha = 2 c s / (3 - s)           (any d)
+ *   plane strain                 alpha = sqrt(2) s / d             (mu_eff = s)
+ *   inscribed                    alpha = c s / sqrt(3 + s^2)       (any d)
+ *   simple shear                 alpha = sqrt(2) tan(phi) / d      (mu_eff = tan phi)
+ *
  * Case III is evaluated in the algebraically identical form
  *   H = tr(eps)/d I + (1 - dgamma/||dev eps||) dev eps,
  *   1 - dgamma/||dev eps|| = -(d lambda + 2 mu) tr(eps) alpha / (2 mu ||dev eps||),
@@ -133,6 +143,47 @@ int sm_dp_project(int d, const sm_real *sigma, sm_real alpha, sm_real mu, sm_rea
 double sm_dp_alpha(double phi_rad) {
     double s = sin(phi_rad);
     return sqrt(2.0 / 3.0) * 2.0 * s / (3.0 - s);
+}
+
+double sm_dp_alpha_fit(double phi_rad, int fit, int d) {
+    if (d != 2 && d != 3) return NAN;
+    double s = sin(phi_rad);
+    switch (fit) {
+    case SM_CONE_TRIAXIAL_COMPRESSION: return sm_dp_alpha(phi_rad);
+    case SM_CONE_PLANE_STRAIN: return sqrt(2.0) * s / d;
+    case SM_CONE_INSCRIBED: return sqrt(2.0 / 3.0) * s / sqrt(3.0 + s * s);
+    case SM_CONE_SIMPLE_SHEAR: return sqrt(2.0) * tan(phi_rad) / d;
+    default: return NAN;
+    }
+}
+
+double sm_dp_phi_for_alpha(double alpha, int fit, int d) {
+    if ((d != 2 && d != 3) || !(alpha >= 0)) return NAN;
+    const double c2 = 2.0 / 3.0;
+    double s;
+    switch (fit) {
+    case SM_CONE_TRIAXIAL_COMPRESSION: s = 3 * alpha / (2 * sqrt(c2) + alpha); break;
+    case SM_CONE_PLANE_STRAIN: s = alpha * d / sqrt(2.0); break;
+    case SM_CONE_INSCRIBED: s = alpha * alpha < c2 ? sqrt(3 * alpha * alpha / (c2 - alpha * alpha)) : 2; break;
+    case SM_CONE_SIMPLE_SHEAR: return atan(alpha * d / sqrt(2.0));
+    default: return NAN;
+    }
+    return s < 1 ? asin(s) : NAN;
+}
+
+static const double DEG_PER_RAD = 180.0 / SM_PI;
+
+double sm_cone_alpha(double degrees, sm_cone_fit fit, int dim) {
+    return sm_dp_alpha_fit(degrees / DEG_PER_RAD, (int)fit, dim);
+}
+
+double sm_effective_friction(double alpha, int dim) {
+    return (dim == 2 || dim == 3) ? alpha * dim / sqrt(2.0) : NAN;
+}
+
+double sm_friction_angle_for_effective_friction(double mu, sm_cone_fit fit, int dim) {
+    if ((dim != 2 && dim != 3) || !(mu >= 0) || !isfinite(mu)) return NAN;
+    return sm_dp_phi_for_alpha(mu * sqrt(2.0) / dim, (int)fit, dim) * DEG_PER_RAD;
 }
 
 double sm_hardening_phi(double q, double h0, double h1, double h2, double h3) {

@@ -52,6 +52,14 @@ int sm_dp_project(int d, const sm_real *sigma, sm_real alpha, sm_real mu, sm_rea
 /* alpha = sqrt(2/3) * 2 sin(phi) / (3 - sin(phi)) (3.80), phi in radians. */
 double sm_dp_alpha(double phi_rad);
 
+/* alpha for friction angle phi (radians) with cone fit `fit` (an sm_cone_fit) in dimension d; NaN
+ * for an unknown fit or d (the fits: material.c's header comment). */
+double sm_dp_alpha_fit(double phi_rad, int fit, int d);
+
+/* The inverse: phi in radians in [0, pi/2) with sm_dp_alpha_fit(phi, fit, d) = alpha (>= 0); NaN if
+ * the fit cannot reach alpha (or bad arguments). */
+double sm_dp_phi_for_alpha(double alpha, int fit, int d);
+
 /* Hardening friction angle (3.79), everything in radians except h2: h0 + (h1 q - h3) exp(-h2 q). */
 double sm_hardening_phi(double q, double h0, double h1, double h2, double h3);
 

@@ -418,11 +418,24 @@ INL void svd3_finish(const svd_work *k, int l, sm_real U[9], sm_real s[3], sm_re
 #define FLOOR SM_SIGMA_FLOOR
 #define SQRT_2_3 SM_R(0.81649658092772603273)
 
+/* alpha of the hardened friction angle, sin(phi) = sp, for cone fit `fit` (sm_cone_fit) in d
+ * dimensions: sm_dp_alpha_fit (material.c) as selects. The thesis's fit (0) is computed exactly as
+ * before the fits existed; cos(phi) = sqrt(1 - sp^2) (phi < 90 degrees), kept away from 0. */
+INL sm_real lane_alpha_fit(int d, int32_t fit, sm_real sp) {
+    const sm_real r2d = SM_R(1.41421356237309504880) / (sm_real)d; /* sqrt(2) / d */
+    sm_real tc = SQRT_2_3 * 2 * sp / (3 - sp);
+    sm_real ps = r2d * sp;
+    sm_real ins = SQRT_2_3 * sp / sm_sqrt(3 + sp * sp);
+    sm_real c2 = 1 - sp * sp;
+    sm_real ss = r2d * sp / sm_sqrt(c2 > SM_EPS ? c2 : SM_EPS);
+    return fit == SM_CONE_PLANE_STRAIN ? ps : fit == SM_CONE_INSCRIBED ? ins : fit == SM_CONE_SIMPLE_SHEAR ? ss : tc;
+}
+
 /* The plasticity of one lane given its SVD (d = 2 or 3). sn: projected singular values;
  * tau: principal Kirchhoff stresses; returns 1 if F must be rebuilt (case 2 or 3). */
 INL int lane_project(int d, const sm_real *s, sm_real *alpha, sm_real *q, sm_real mu,
                      sm_real lambda, sm_real h0, sm_real h1, sm_real h2, sm_real h3, int plastic,
-                     int hardening, sm_real *sn, sm_real *tau) {
+                     int hardening, int32_t fit, sm_real *sn, sm_real *tau) {
     sm_real eps[3], dev[3], H[3];
     sm_real tr = 0, emax = 0, devmax = 0, ne = 0, nd = 0;
     for (int i = 0; i < d; i++) {
@@ -473,7 +486,7 @@ INL int lane_project(int d, const sm_real *s, sm_real *alpha, sm_real *q, sm_rea
     sm_real qn = *q + dq;
     sm_real phi = h0 + (h1 * qn - h3) * lane_exp(-h2 * qn);
     sm_real sp = lane_sin(phi);
-    sm_real an = SQRT_2_3 * 2 * sp / (3 - sp);
+    sm_real an = lane_alpha_fit(d, fit, sp);
     *q = harden ? qn : *q;
     *alpha = harden ? an : *alpha;
     return case1 == 0;
@@ -492,7 +505,7 @@ INL void stage_project(int d, sm_plastic_lanes *b, lane_state *st) {
         for (int i = 0; i < d; i++) s[i] = st->s[i][l];
         sm_real alpha = b->alpha[l], q = b->q[l];
         st->rebuild[l] = lane_project(d, s, &alpha, &q, b->mu[l], b->lambda[l], b->h0[l], b->h1[l], b->h2[l],
-                                      b->h3[l], b->plastic[l] != 0, b->hardening[l] != 0, sn, t);
+                                      b->h3[l], b->plastic[l] != 0, b->hardening[l] != 0, b->fit[l], sn, t);
         b->alpha[l] = alpha;
         b->q[l] = q;
         for (int i = 0; i < d; i++) st->sn[i][l] = sn[i], st->t[i][l] = t[i];

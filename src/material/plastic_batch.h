@@ -5,7 +5,7 @@
  *   if plastic: s' = PROJECT(s, alpha) (sm_dp_project: cases 1, 2, 3, same floor policy);
  *               if case != 1: F = U diag(s') V^T;
  *                             if hardening and dq > 0: q += dq,
- *                                alpha = sm_dp_alpha(sm_hardening_phi(q, h0, h1, h2, h3));
+ *                                alpha = sm_dp_alpha_fit(sm_hardening_phi(q, h0, h1, h2, h3), fit, d);
  *   tau = U diag(sm_hencky_tau(s')) U^T.
  * with its own branch-free SVD (same method as sm_svd3/sm_svd2, fixed sweep count) and its own
  * log/exp/sin polynomials, so the results agree with the scalar path to a few rounding errors,
@@ -16,7 +16,7 @@
  * Layout: element e of particle l is F[e][l]. 3D: F, tau are 3x3 row-major in e = 0..8.
  * 2D: e = 0..3 (2x2 row-major); entries 4..8 are ignored/untouched. All fields are per lane, so
  * one batch can mix materials. Padding lanes (a partial last batch): fill them with any finite
- * valid particle, e.g. F = I, alpha = q = 0, mu = 1, lambda = 0, plastic = hardening = 0 (or a
+ * valid particle, e.g. F = I, alpha = q = 0, mu = 1, lambda = 0, plastic = hardening = fit = 0 (or a
  * copy of lane 0), and ignore their outputs. mu must be > 0 in plastic lanes, as for
  * sm_dp_project.
  *
@@ -46,6 +46,7 @@ typedef struct sm_plastic_lanes {
     _Alignas(64) sm_real h3[SM_PLASTIC_LANES];
     _Alignas(64) int32_t plastic[SM_PLASTIC_LANES];   /* 0: elastic only (no projection) */
     _Alignas(64) int32_t hardening[SM_PLASTIC_LANES]; /* 1: alpha follows q */
+    _Alignas(64) int32_t fit[SM_PLASTIC_LANES];       /* sm_cone_fit of the hardening alpha */
 } sm_plastic_lanes;
 
 /* A material's parameters as the lanes take them (sm_plastic_lanes_set_params). */
@@ -54,6 +55,7 @@ typedef struct sm_plastic_params {
     sm_real h0, h1, h2, h3; /* hardening (3.79), radians except h2 */
     int32_t plastic;        /* 0: elastic only (no projection) */
     int32_t hardening;      /* 1: alpha follows q */
+    int32_t fit;            /* sm_cone_fit of the hardening alpha (0: the thesis's, 3.80) */
 } sm_plastic_params;
 
 /* Packing: the one way particles enter and leave the lanes (the world's plasticity stage,
@@ -64,7 +66,7 @@ typedef struct sm_plastic_params {
  * rest 0). */
 static inline __attribute__((always_inline)) void sm_plastic_lanes_set_params(sm_plastic_lanes *b, int l,
                                                                               const sm_plastic_params *p) {
-    static const sm_plastic_params pad = {1, 0, 0, 0, 0, 0, 0, 0};
+    static const sm_plastic_params pad = {1, 0, 0, 0, 0, 0, 0, 0, 0};
     if (!p) p = &pad;
     b->mu[l] = p->mu;
     b->lambda[l] = p->lambda;
@@ -74,6 +76,7 @@ static inline __attribute__((always_inline)) void sm_plastic_lanes_set_params(sm
     b->h3[l] = p->h3;
     b->plastic[l] = p->plastic;
     b->hardening[l] = p->hardening;
+    b->fit[l] = p->fit;
 }
 
 /* Lane l takes a particle's state: F^E (d*d values, row-major), alpha, q; F == NULL: padding

@@ -52,6 +52,8 @@ sm_status sm_material_def_check(const sm_material_def *m, char *err, size_t errl
     if (!(m->poisson_ratio > -1 && m->poisson_ratio < 0.5))
         return sm_check_fail(err, errlen, "nu: must be in (-1, 0.5), got %g", m->poisson_ratio);
     if (m->kind == SM_MATERIAL_SAND) {
+        if ((unsigned)m->cone_fit > (unsigned)SM_CONE_SIMPLE_SHEAR)
+            return sm_check_fail(err, errlen, "cone_fit: unknown value %d", (int)m->cone_fit);
         if (m->hardening) {
             const double h[4] = {m->h0, m->h1, m->h2, m->h3};
             for (int i = 0; i < 4; i++)
@@ -96,10 +98,11 @@ sm_status sm_world_add_material(sm_world *w, const sm_material_def *m, int *id) 
     law->h1 = (sm_real)h1;
     law->h2 = (sm_real)h2;
     law->h3 = (sm_real)h3;
+    law->fit = (int32_t)m->cone_fit;
     r->density = (sm_real)m->density;
     if (law->plastic)
-        r->alpha0 = (sm_real)(law->hardening ? sm_dp_alpha(sm_hardening_phi(0, h0, h1, h2, h3))
-                                             : sm_dp_alpha(m->friction_angle * DEG));
+        r->alpha0 = (sm_real)sm_dp_alpha_fit(law->hardening ? sm_hardening_phi(0, h0, h1, h2, h3) : m->friction_angle * DEG,
+                                             law->fit, w->dim);
     r->wave_speed = sqrt((lambda + 2 * mu) / m->density);
     if (id) *id = w->nmats;
     w->nmats++;

@@ -1,0 +1,254 @@
+/* sm_validate: the analytic benchmarks of docs/validation.md, printed as CSV (one header line,
+ * comment lines start with '#'). Run by validation/run.py; built as tests/sm_validate.
+ *
+ *   sm_validate incline [--quick]   block on an incline: an elastic block (rho 1000, E 1e6, nu 0.3)
+ *       on a Coulomb plane, released at rest a quarter cell above it. Expected acceleration along
+ *       the slope a = g (sin th - mu cos th) if tan th > mu, else 0 (Coulomb friction through the
+ *       collider, thesis §3.6.3 / Algorithm 7; the plane "separate", and "slip" for two cases).
+ *       Two set-ups: "tilted" = the plane turned by th in
+ *       the grid (not grid aligned), gravity vertical; "aligned" = the plane y = const and gravity
+ *       turned by th. a is the least-squares slope of the mean velocity along the slope over
+ *       [0.05 s, 0.2 s]; max_dt = 2e-5 s (fine; one case also at 1e-4 s; 3D at 1e-4 s, tilted only).
+ *   sm_validate column [--quick]    gravity-loaded elastic column, 2D plane strain: width H/4
+ *       between slip walls on a slip base, H = 1 m, rho 1000, E 1e7, nu 0.3 (strain 1e-3), released
+ *       stress free (explicit steps). Uniaxial strain: sigma_yy = -rho g (H - y), sigma_xx / sigma_yy
+ *       = nu / (1 - nu) (Hencky: tau = 2 mu eps + lambda tr eps with eps_xx = 0 gives lambda /
+ *       (lambda + 2 mu) exactly). The column oscillates about that state (period 4 H / c = 34 ms,
+ *       odd harmonics at integer fractions of it; APIC hardly damps it), so the stress is averaged
+ *       over 8 periods from 0.1 s, 25 samples a period, in bins of dx in y: the average of a linear
+ *       oscillation over whole periods is its equilibrium. Cauchy stress per particle from F^E:
+ *       sigma = U diag(2 mu ln s_i + lambda sum ln s_k) U^T / det F^E (3.70). Errors: RMS over the
+ *       bins of mean sigma_yy - exact, relative to the RMS of the exact; the ratio over bins below
+ *       0.8 H. Finite strain moves y by <= 5e-4 H: below the errors measured. Twice: the walls on
+ *       grid lines (x = 0, x = W, y = 0), and moved 1e-6 dx into the column ("shifted").
+ *   sm_validate shear [--quick]     steady simple shear of one material point (validation/
+ *       mp_shear.h) for phi = 20..40 and every cone fit, 2D and 3D: tau_xy / (-tau_yy) against
+ *       mu_eff = d alpha / sqrt(2). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "material/material.h"
+#include "math/svd.h"
+#include "sandmpm/sandmpm.h"
+#include "mp_shear.h"
+
+static const double PI = 3.14159265358979323846, G = 9.81;
+
+static int fail(const char *what, sm_world *w) {
+    fprintf(stderr, "sm_validate: %s: %s\n", what, w ? sm_world_errmsg(w) : "");
+    exit(3);
+}
+
+/* One block-on-incline run; returns the fitted acceleration along the slope. */
+static double incline_run(int dim, double th_deg, double mu, int tilted, sm_collide_mode mode, double max_dt,
+                          double t_end) {
+    const double th = th_deg * PI / 180;
+    sm_world_def def = sm_world_def_default();
+    def.dim = dim;
+    def.dx = dim == 2 ? 0.01 : 0.02;
+    def.max_dt = max_dt;
+    def.domain_max[0] = 2.0;
+    def.domain_max[1] = 1.3;
+    def.domain_max[2] = 0.3;
+    /* tilted: plane through p0 with normal n, gravity -y; aligned: plane y = 0.2, gravity along
+     * (-sin th, -cos th) in the grid: down the slope is -x */
+    double n[3], tdown[3];
+    if (tilted) {
+        n[0] = -sin(th), n[1] = cos(th), n[2] = 0;
+        tdown[0] = -cos(th), tdown[1] = -sin(th), tdown[2] = 0;
+    } else {
+        n[0] = 0, n[1] = 1, n[2] = 0;
+        tdown[0] = -1, tdown[1] = 0, tdown[2] = 0;
+        def.gravity[0] = -G * sin(th);
+        def.gravity[1] = -G * cos(th);
+    }
+    const double p0[3] = {tilted ? 1.0 : 1.6, tilted ? 0.6 : 0.2, 0.15};
+    sm_world *w = NULL;
+    char err[256];
+    if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) {
+        fprintf(stderr, "sm_validate: %s\n", err);
+        exit(2);
+    }
+    sm_material_def m = sm_material_def_elastic();
+    m.youngs_modulus = 1e6;
+    int mat = -1;
+    if (sm_world_add_material(w, &m, &mat) != SM_OK) fail("material", w);
+    sm_collider_def c = sm_collider_def_default();
+    c.shape_count = 1;
+    c.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
+    for (int a = 0; a < 3; a++) c.shapes[0].center[a] = p0[a], c.shapes[0].normal[a] = n[a];
+    c.mode = mode;
+    c.friction = mu;
+    if (sm_world_add_collider(w, &c, NULL) != SM_OK) fail("collider", w);
+    sm_shape box = sm_shape_default(SM_SHAPE_BOX);
+    const double hy = 0.05, up = 0.6 * (tilted ? 1 : 0.5);
+    for (int a = 0; a < 3; a++) box.center[a] = p0[a] - up * tdown[a] + (hy + 0.25 * def.dx) * n[a];
+    box.center[2] = 0.15;
+    box.half_extent[0] = 0.1, box.half_extent[1] = hy, box.half_extent[2] = 0.05;
+    if (tilted) box.rotation[0] = cos(th / 2), box.rotation[3] = sin(th / 2);
+    sm_seed_def sd = sm_seed_def_default();
+    sd.material = mat;
+    sd.ppc = dim == 2 ? 4 : 8;
+    if (sm_world_seed_shape(w, &box, &sd, NULL) != SM_OK) fail("seed", w);
+    double St = 0, Sv = 0, Stt = 0, Stv = 0;
+    int k = 0;
+    sm_diagnostics d;
+    for (int f = 1; f * 0.005 <= t_end + 1e-9; f++) {
+        if (sm_world_advance(w, f * 0.005) != SM_OK) fail("advance", w);
+        sm_world_diagnostics(w, &d);
+        double t = sm_world_time(w), v = (d.momentum[0] * tdown[0] + d.momentum[1] * tdown[1]) / d.total_mass;
+        if (t >= 0.05 - 1e-9) St += t, Sv += v, Stt += t * t, Stv += t * v, k++;
+    }
+    sm_world_destroy(w);
+    return (k * Stv - St * Sv) / (k * Stt - St * St);
+}
+
+static void incline(int quick) {
+    printf("dim,setup,mode,theta,mu,max_dt,expected,measured,rel_error\n");
+    /* theta, mu, mode (0 separate, 1 slip), max_dt; 3D: the first of each set-up */
+    const double cases[][4] = {{30, 0.2, 0, 2e-5}, {30, 0.0, 0, 2e-5}, {30, 0.5, 0, 2e-5}, {30, 0.7, 0, 2e-5},
+                               {45, 0.3, 0, 2e-5}, {30, 0.2, 0, 1e-4}, {30, 0.2, 1, 2e-5}};
+    const int nc = quick ? 2 : (int)(sizeof cases / sizeof cases[0]);
+    for (int dim = 2; dim <= 3; dim++)
+        for (int tilted = 1; tilted >= 0; tilted--)
+            for (int i = 0; i < (dim == 3 ? (tilted ? 1 : 0) : (tilted ? nc : (nc < 4 ? nc : 4))); i++) {
+                double th = cases[i][0], mu = cases[i][1], dt = dim == 3 ? 1e-4 : cases[i][3];
+                sm_collide_mode mode = cases[i][2] > 0 ? SM_COLLIDE_SLIP : SM_COLLIDE_SEPARATE;
+                double r = th * PI / 180;
+                double expect = tan(r) > mu ? G * (sin(r) - mu * cos(r)) : 0;
+                double a = incline_run(dim, th, mu, tilted, mode, dt, quick ? 0.15 : 0.2);
+                printf("%d,%s,%s,%g,%g,%g,%.6f,%.6f,%.3g\n", dim, tilted ? "tilted" : "aligned",
+                       mode == SM_COLLIDE_SLIP ? "slip" : "separate", th, mu, dt, expect, a,
+                       expect > 0 ? (a - expect) / expect : a / G);
+                fflush(stdout);
+            }
+}
+
+/* Elastic column at `cells` cells over its height: errors of the time-averaged sigma_yy and ratio. */
+static void column_run(int cells, int shifted, double *err_yy, double *ratio, double *err_ratio, size_t *np,
+                       int *unconverged) {
+    const double H = 1.0, W = 0.25, dx = H / cells, nu = 0.3, E = 1e7, rho = 1000;
+    sm_world_def def = sm_world_def_default();
+    def.dim = 2;
+    def.dx = dx;
+    def.domain_min[0] = def.domain_min[1] = -4 * dx;
+    def.domain_max[0] = W + 4 * dx;
+    def.domain_max[1] = H + 4 * dx;
+    sm_world *w = NULL;
+    char err[256];
+    if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) {
+        fprintf(stderr, "sm_validate: %s\n", err);
+        exit(2);
+    }
+    sm_material_def m = sm_material_def_elastic();
+    m.density = rho, m.youngs_modulus = E, m.poisson_ratio = nu;
+    int mat = -1;
+    if (sm_world_add_material(w, &m, &mat) != SM_OK) fail("material", w);
+    /* shifted: the walls 1e-6 dx into the column, so that the grid nodes on the column's faces are
+     * inside the slip colliders (a slip collider acts on nodes with phi < 0 only) */
+    const double e = shifted ? 1e-6 * dx : 0;
+    const double pts[3][3] = {{0, e, 0}, {e, 0, 0}, {W - e, 0, 0}}, nrm[3][3] = {{0, 1, 0}, {1, 0, 0}, {-1, 0, 0}};
+    for (int i = 0; i < 3; i++) {
+        sm_collider_def c = sm_collider_def_default();
+        c.shape_count = 1;
+        c.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
+        for (int a = 0; a < 3; a++) c.shapes[0].center[a] = pts[i][a], c.shapes[0].normal[a] = nrm[i][a];
+        c.mode = SM_COLLIDE_SLIP;
+        if (sm_world_add_collider(w, &c, NULL) != SM_OK) fail("collider", w);
+    }
+    sm_shape box = sm_shape_default(SM_SHAPE_BOX);
+    box.center[0] = W / 2, box.center[1] = H / 2;
+    box.half_extent[0] = W / 2, box.half_extent[1] = H / 2;
+    sm_seed_def sd = sm_seed_def_default();
+    sd.material = mat;
+    sd.ppc = 4;
+    if (sm_world_seed_shape(w, &box, &sd, NULL) != SM_OK) fail("seed", w);
+    double mu_l, la;
+    sm_lame(E, nu, &mu_l, &la);
+    /* time average over 8 periods of the fundamental, 4 H / c, sampled 25 times a period, from 0.1 s */
+    const double c = sqrt((la + 2 * mu_l) / rho), T1 = 4 * H / c, t0 = 0.1;
+    const int nb = cells + 4, ns = 8 * 25;
+    double *acc = calloc((size_t)nb * 4, sizeof *acc); /* per y-bin: sum syy, sum sxx, sum y, count */
+    if (!acc) exit(5);
+    for (int k = 0; k < ns; k++) {
+        if (sm_world_advance(w, t0 + k * T1 / 25) != SM_OK) fail("advance", w);
+        sm_particles_view pv;
+        sm_world_particles(w, &pv);
+        for (size_t i = 0; i < pv.n; i++) {
+            sm_real U[4], V[4], s[2];
+            sm_svd2(pv.F + 4 * i, U, s, V);
+            double l0 = log((double)s[0]), l1 = log((double)s[1]), J = (double)s[0] * (double)s[1];
+            double t0_ = 2 * mu_l * l0 + la * (l0 + l1), t1_ = 2 * mu_l * l1 + la * (l0 + l1);
+            double y = (double)pv.x[2 * i + 1];
+            int b = (int)floor(y / dx);
+            if (b < 0 || b >= nb) continue;
+            acc[4 * b] += ((double)U[2] * U[2] * t0_ + (double)U[3] * U[3] * t1_) / J;
+            acc[4 * b + 1] += ((double)U[0] * U[0] * t0_ + (double)U[1] * U[1] * t1_) / J;
+            acc[4 * b + 2] += y, acc[4 * b + 3] += 1;
+        }
+        *np = pv.n;
+    }
+    *unconverged = 0;
+    double se = 0, sx = 0, rs = 0, re = 0;
+    int nr = 0;
+    const double rexact = nu / (1 - nu);
+    for (int b = 0; b < nb; b++) {
+        if (acc[4 * b + 3] == 0) continue;
+        double n = acc[4 * b + 3], syy = acc[4 * b] / n, sxx = acc[4 * b + 1] / n, y = acc[4 * b + 2] / n;
+        double ex = -rho * G * (H - y);
+        se += (syy - ex) * (syy - ex), sx += ex * ex;
+        if (y < 0.8 * H) rs += sxx / syy, re += (sxx / syy - rexact) * (sxx / syy - rexact), nr++;
+    }
+    free(acc);
+    *err_yy = sqrt(se / sx);
+    *ratio = rs / nr;
+    *err_ratio = sqrt(re / nr) / rexact;
+    sm_world_destroy(w);
+}
+
+static void column(int quick) {
+    printf("walls,cells,dx,particles,err_syy,ratio_mean,ratio_exact,err_ratio\n");
+    const int cells[] = {8, 16, 32};
+    for (int shifted = 1; shifted >= 0; shifted--)
+        for (int i = 0; i < (quick ? 2 : 3); i++) {
+            double e, r, er;
+            size_t np;
+            int unc;
+            column_run(cells[i], shifted, &e, &r, &er, &np, &unc);
+            printf("%s,%d,%g,%zu,%.4g,%.5f,%.5f,%.4g\n", shifted ? "shifted" : "on_grid_lines", cells[i], 1.0 / cells[i], np, e,
+                   r, 0.3 / 0.7, er);
+            fflush(stdout);
+            (void)unc;
+        }
+}
+
+static void shear(int quick) {
+    (void)quick;
+    static const char *names[] = {"triaxial_compression", "plane_strain", "inscribed", "simple_shear"};
+    double mu_l, la;
+    sm_lame(3.537e5, 0.3, &mu_l, &la);
+    printf("dim,fit,phi,alpha,mu_eff,mu_sim,angle_eff\n");
+    for (int d = 2; d <= 3; d++)
+        for (int fit = 0; fit < 4; fit++)
+            for (double phi = 20; phi <= 40.01; phi += 5) {
+                double a = sm_cone_alpha(phi, (sm_cone_fit)fit, d);
+                mp_shear_result r;
+                mp_shear_run(d, a, mu_l, la, 1e-3, 1e-3, 2.0, &r);
+                double me = sm_effective_friction(a, d);
+                printf("%d,%s,%g,%.6f,%.6f,%.6f,%.3f\n", d, names[fit], phi, a, me, r.mu, atan(me) * 180 / PI);
+            }
+}
+
+int main(int argc, char **argv) {
+    int quick = argc > 2 && !strcmp(argv[2], "--quick");
+    if (argc >= 2 && !strcmp(argv[1], "incline")) incline(quick);
+    else if (argc >= 2 && !strcmp(argv[1], "column")) column(quick);
+    else if (argc >= 2 && !strcmp(argv[1], "shear")) shear(quick);
+    else {
+        fprintf(stderr, "usage: sm_validate incline|column|shear [--quick]\n");
+        return 2;
+    }
+    return 0;
+}

@@ -1,0 +1,515 @@
+"""The text of docs/validation.md around the numbers (report.py fills them in from results.json).
+Each section is a function of the results; nothing here holds a measured number."""
+import math
+
+REFERENCES = """## References and where the constants come from
+
+- Lube, Huppert, Sparks, Freundt 2005, *Collapses of two-dimensional granular columns*, Phys. Rev. E 72,
+  041301: (L∞ − L0)/L0 ≈ 1.2 a for small a and ≈ 1.9 a^(2/3) beyond (the transition near a ≈ 1.8–2.8;
+  2.3 is used here); H∞/L0 ≈ a^0.4 for large a. Below a ≈ 1 the top of the column survives and
+  H∞ = H0; the plotted height law switches from a to a^0.4 at a = 1 (that break is this document's).
+- Lajeunesse, Monnier, Homsy 2005, *Granular slumping on a horizontal surface*, Phys. Fluids 17,
+  103302: (L∞ − L0)/L0 ≈ 1.8 a below a ≈ 3 and ≈ 2.3 a^(2/3) above.
+- Balmforth, Kerswell 2005, *Granular collapse in two dimensions*, J. Fluid Mech. 538, 399: exponents
+  only, with material-dependent prefactors: (l∞ − L)/L ∼ a^(0.9±0.1) and H/h∞ ∼ a^0.6 in wide
+  channels; (l∞ − L)/L ∼ a^(0.65±0.05) and H/h∞ ∼ a^0.5 in narrow slots (the abstract).
+- Lube, Huppert, Sparks, Hallworth 2004, *Axisymmetric collapses of granular columns*, J. Fluid Mech.
+  508, 175: (R∞ − R0)/R0 ≈ 1.24 a for a ≲ 1.7 and ≈ 1.6 a^(1/2) beyond; H∞/R0 saturating near 0.74–0.9
+  with Lajeunesse et al. 2004.
+- Lajeunesse, Mangeney-Castelnau, Vilotte 2004, *Spreading of a granular mass on a horizontal plane*,
+  Phys. Fluids 16, 2371: the final height saturating with a (quoted with Lube 2004's 0.74–0.9); its
+  runout law is quoted inconsistently by the secondary sources seen here and is not used.
+
+Balmforth & Kerswell's exponents were checked against the paper's abstract. The prefactors of Lube
+2005, Lajeunesse 2005 (as collected in Lagrée, Staron & Popinet 2011, J. Fluid Mech. 686, 378,
+Eq. 3.1) and Lube 2004 were checked against secondary sources quoting them, not
+against the original papers (not available here): treat them as the commonly quoted values.
+Experiments scatter by 10–30% between materials and set-ups around these laws.
+"""
+
+
+def intro(c):
+    r = c["res"]
+    mode = "quick (coarse) subset" if r["quick"] else "full study"
+    total = sum(v["wall_s"] for grp in ("collapse", "pile") for v in r.get(grp, {}).values())
+    return f"""# Validation against experiments and analytic solutions
+
+This document is written by `scripts/validate.sh` (validation/run.py runs and measures the
+simulations, validation/report.py writes this file and the plots from out/validation/…/results.json):
+every number and plot below is an output of that command; do not edit them by hand. This is the
+{mode}: {len(r['collapse']) + len(r.get('pile', {}))} simulations, {total / 60:.0f} minutes of wall time added over the runs
+(one thread per run, two runs at a time, on 2 cores shared with other work: the times in section 8
+are not benchmarks). Scenes: `validation/scenes/` (collapse2d.lua, collapse3d.lua,
+pile.lua, heap.lua), runnable by themselves with `sandmpm run SCENE --set KEY=VALUE`.
+
+Sand everywhere: the thesis's Table 4.2 (ρ 2200 kg/m³, E 3.537e5 Pa, ν 0.3), a fixed friction angle
+φ_F = 30° unless said otherwise, APIC, quadratic B-splines, explicit steps at the default CFL and
+elastic-wave bounds, the default departures from the thesis on (static_friction_sticks,
+particle_projection; README).
+
+## Measuring a deposit
+
+From a frame's PLY file (validation/deposit.py): s = dx / ppc^(1/d) is the particle spacing. The
+deposit thickness in bins of width dx (2D: x from the back wall; 3D: annuli in r = √(x² + z²) of the
+quarter) is the particles' current volume V0 Jᴱ per unit base length or area. The **front** (L∞ or
+R∞) is found going outward: the last bin at least one particle layer (s) thick, bridging single
+thinner bins, and within it the farthest particle plus s/2; scattered particles beyond do not count.
+The **height** H∞ is the highest particle inside the front plus s/2. At t = 0 these return L0 (R0)
+and H0 to within the seeding jitter (s/2). The **flow duration** t∞ is the first frame time after
+which the front stays within 2% of its final advance (frames every √(H0/g)/4). The **repose angle**
+of a pile or heap is the slope of a least-squares line through the top surface (highest particle per
+bin plus s/2) where it lies between 20% and 80% of the peak height.
+"""
+
+
+def collapse2d(c):
+    res, T, fmt = c["res"], c["table"], c["fmt"]
+    L = c["laws"]
+    tc = c["collapse_rows"](res, "collapse2d", 2, c["FITS"][0])
+    if not tc:
+        return ""
+    n = tc[0]["n"]
+    rows = []
+    for v in tc:
+        rows.append([fmt(v["a"], 2), fmt(v["runout"]), fmt(L["lube2005"](v["a"])), fmt(L["lajeunesse2005"](v["a"])),
+                     fmt(v["height"]), fmt(L["lube2005_height"](v["a"])), fmt(v["t_flow"] / v["tau"], 1)])
+    fit = c["fits_of"](tc, 2.3)
+    fit_rows = []
+    for fname in c["FITS"]:
+        fr = c["collapse_rows"](res, "collapse2d", 2, fname)
+        f = c["fits_of"](fr, 2.3)
+        if not f:
+            continue
+        s = f.get("small", (float("nan"),) * 2)
+        lg = f.get("large", (float("nan"),) * 2)
+        h = f.get("height", (float("nan"),) * 2)
+        fit_rows.append([c["FIT_LABEL"][fname], f"{s[0]:.2f} a^{s[1]:.2f}", f"{lg[0]:.2f} a^{lg[1]:.2f}",
+                         f"{h[0]:.2f} a^{h[1]:.2f}"])
+    fit_rows.append(["Lube et al. 2005", "1.2 a^1", "1.9 a^0.67", "a^0.4"])
+    fit_rows.append(["Lajeunesse et al. 2005", "1.8 a^1", "2.3 a^0.67", "–"])
+    fit_rows.append(["Balmforth & Kerswell 2005 (slot / wide)", "–", "a^(0.65±0.05) / a^(0.9±0.1)", "a^0.5 / a^0.6 (as H0/H∞)"])
+    _ = fit
+    return f"""## 1. Granular column collapse in 2D (plane strain)
+
+A column of length L0 = 5 cm and height H0 = a L0 against a slip (frictionless) back wall at x = 0,
+on a sticky base, released at once; L0/dx = {n}, 4 particles per cell, φ_F = 30°, simulated for
+5 √(H0/g) (8 for a < 1.5). The thesis's cone fit (triaxial compression):
+
+{T(["a", "(L∞−L0)/L0", "Lube 2005", "Lajeunesse 2005", "H∞/L0", "Lube 2005", "t∞/√(H0/g)"], rows)}
+
+![2D collapse: runout and height against a, every cone fit, with the experimental laws]({c['figs']['c2']})
+
+Power laws fitted to the simulations (least squares in log–log; "small a": a ≤ 2.3, "large a": a > 2.3;
+the height fit over a > 2.3):
+
+{T(["series", "runout, small a", "runout, large a", "H∞/L0, large a"], fit_rows)}
+
+Deposits at a = 2 (every fit; the grey box is the initial column):
+
+![2D deposits at a = 2]({c['figs']['prof']})
+
+Flow duration against √(H0/g); the line t = 3 √(H0/g) is drawn as the scale of the flow durations
+commonly quoted for the experiments (not checked against the papers here):
+
+![flow duration]({c['figs']['tflow']})
+"""
+
+
+def collapse3d(c):
+    res, T, fmt = c["res"], c["table"], c["fmt"]
+    L = c["laws"]
+    tc = c["collapse_rows"](res, "collapse3d", 3, c["FITS"][0])
+    if not tc:
+        return ""
+    n = tc[0]["n"]
+    rows = []
+    for fname in c["FITS"]:
+        for v in c["collapse_rows"](res, "collapse3d", 3, fname):
+            rows.append([c["FIT_LABEL"][fname], fmt(v["a"], 2), fmt(v["runout"]), fmt(L["lube2004"](v["a"])),
+                         fmt(v["height"]), fmt(v["t_flow"] / v["tau"], 1)])
+    return f"""## 2. Axisymmetric collapse in 3D
+
+A cylinder of radius R0 = 5 cm and height H0 = a R0 on a sticky base; the quarter x, z ≥ 0 is
+simulated with slip walls on the symmetry planes x = 0 and z = 0; R0/dx = {n}, 8 particles per cell,
+φ_F = 30°.
+
+{T(["cone fit", "a", "(R∞−R0)/R0", "Lube 2004", "H∞/R0", "t∞/√(H0/g)"], rows)}
+
+The experiments' final height saturates near H∞/R0 ≈ 0.74–0.9 (Lube et al. 2004, Lajeunesse et al.
+2004) for large a.
+
+![3D collapse: runout and height against a, every cone fit, with the experimental laws]({c['figs']['c3']})
+"""
+
+
+def friction(c):
+    res, T = c["res"], c["table"]
+    sh = res.get("analytic", {}).get("shear", [])
+    rows = []
+    for r in sh:
+        if r["phi"] in (20, 30, 40):
+            rows.append([int(r["dim"]), c["FIT_LABEL"][r["fit"]], int(r["phi"]), f"{r['alpha']:.4f}", f"{r['mu_eff']:.4f}",
+                         f"{r['angle_eff']:.1f}", f"{r['mu_sim']:.4f}"])
+    piles = res.get("pile", {})
+    prow = []
+    for name, v in sorted(piles.items()):
+        if v["group"] != "pile":
+            continue
+        s = v["sets"]
+        dim = s.get("dim", 3)
+        from_fit = next((r for r in sh if r["dim"] == dim and r["fit"] == s["fit"] and r["phi"] == s["phi"]), None)
+        ae = from_fit["angle_eff"] if from_fit else float("nan")
+        prow.append([dim, c["FIT_LABEL"][s["fit"]], s["phi"], s["n"], f"{ae:.1f}", f"{v['angle']:.1f}", f"{v['peak'] * 1000:.1f}"])
+    return f"""## 3. What the friction angle means
+
+The return mapping (Algorithm 2) projects onto the cone ‖dev τ‖ + α tr τ ≤ 0 along −dev ε: its plastic
+flow is deviatoric (volume-preserving, non-associative), and α comes from φ_F by (3.80), the
+Drucker–Prager cone through Mohr–Coulomb's compression meridian (triaxial compression, the
+circumscribed cone in 3D). In 2D the code takes d = 2 traces: dev A = A − (tr A/2) I and the cone
+constant d λ + 2 μ.
+
+**Steady simple shear.** Shear at rate γ̇ on planes normal to y: v_x = γ̇ y, D = (γ̇/2)(e_x e_y + e_y e_x),
+a trace-free rate. In a steady state the elastic strain does not change, so the plastic rate equals D
+(up to the co-rotation of the small elastic strain, below). The plastic rate of case III is along
+dev τ (the projection moves ε along −dev ε, and dev τ = 2μ dev ε), so dev τ ∥ D: the stress is
+τ = −p I + t (e_x e_y + e_y e_x), with normal stresses all equal to −p, −tr τ = d p, and
+‖dev τ‖ = √2 |t|. On the cone √2 t = d α p, so the stress ratio on the shear plane — the friction
+coefficient that flowing sand shows — is
+
+  μ_eff = t / p = τ_xy / (−τ_yy) = 3α/√2 in 3D,  √2 α in 2D,
+
+whatever fit gave α. With (3.80), s = sin φ_F:
+
+  3D: μ_eff = 2√3 s / (3 − s)  (30° → 0.693, atan 34.7°);  2D: μ_eff = (4/√3) s / (3 − s)  (30° → 0.462, atan 24.8°).
+
+So the thesis's fit makes 3D sand flow like sand of friction angle 34.7° (stronger than φ_F: the
+circumscribed cone is wider than Mohr–Coulomb everywhere but at triaxial compression) and 2D sand
+like 24.8° (weaker: in 2D the cone is exactly Mohr–Coulomb in the plane, sin φ_2D = √2 α = 0.462 for
+α(30°), i.e. φ_2D = 27.5°, and the flowing friction of a non-dilatant Mohr–Coulomb material in simple
+shear is sin φ, not tan φ: the shear plane of a non-dilatant steady flow is the plane of maximum shear
+stress, τ/σ = R/c = sin φ). The cone fits that `cone_fit` offers (sm_cone_fit, material.c):
+
+| fit | α(φ) 3D | α(φ) 2D | μ_eff |
+|---|---|---|---|
+| triaxial compression (thesis, default) | √(2/3) 2s/(3 − s) | same | 3D 2√3 s/(3 − s), 2D (4/√3) s/(3 − s) |
+| plane strain (Mohr–Coulomb in plane strain with this non-dilatant flow) | √2 s/3 | s/√2 | sin φ |
+| inscribed (inside the Mohr–Coulomb pyramid) | √(2/3) s/√(3 + s²) | same | 3D √3 s/√(3 + s²), 2D (2/√3) s/√(3 + s²) |
+| simple shear (flows at τ/σ = tan φ) | √2 tan φ/3 | tan φ/√2 | tan φ |
+
+The "plane strain" fit makes the cone pass through Mohr–Coulomb where this flow rule puts plane
+strain (s₂ = 0); "simple shear" makes φ_F the angle that a steadily flowing layer of the sand takes,
+the usual meaning of a granular friction angle (μ = tan φ in μ(I) rheology) and of a (dynamic) repose
+angle. The material key `repose_angle` (docs/scene-format.md) takes that angle θ and sets φ_F =
+sm_friction_angle_for_effective_friction(tan θ, fit, dim), the inverse of the formulas above (tested
+in tests/test_cone_fit.c for every fit and dimension, with NaN where a fit cannot reach a friction:
+plane strain and inscribed cap μ_eff below 1 and 0.87).
+
+**Check by simulation** — one material point sheared steadily with the step's own kinematics
+(F ← (I + Δt ∇v) F, SVD, PROJECT; validation/mp_shear.h) at an elastic compression of 1e-3, to a shear
+strain of 2 (`sm_validate shear`); μ_sim = τ_xy/(−τ_yy) at the end:
+
+{T(["d", "fit", "φ_F", "α", "μ_eff (derived)", "atan μ_eff (°)", "μ_sim"], rows)}
+
+μ_sim falls short of μ_eff by a fraction of the elastic shear strain: the finite-strain update
+co-rotates the elastic strain, which turns the stress off the rate's axes by that order (at an
+elastic compression of 1e-2 the shortfall is 2–6%, tests/test_cone_fit.c).
+
+**Repose angle of poured piles** (pile.lua: a spout of half-width 4 mm, 4 cm above a sticky plate,
+20 g/s in 3D (a quarter simulated) or 2 kg/(m s) in 2D, for 1 s at 0.5 m/s downward, then 0.4 s at
+rest; dx = 6 mm / n):
+
+{T(["d", "fit", "φ_F", "n", "atan μ_eff (°)", "flank angle (°)", "peak (mm)"], prow)}
+"""
+
+
+def which_fit(c):
+    res, T = c["res"], c["table"]
+    L = c["laws"]
+    rows = []
+    best = {}
+    for dim, law_a, law_b in ((2, "lube2005", "lajeunesse2005"), (3, "lube2004", None)):
+        for fname in c["FITS"]:
+            fr = c["collapse_rows"](res, f"collapse{dim}d", dim, fname)
+            fr = [v for v in fr if v["a"] in (0.5, 1, 2, 4, 8)]
+            if not fr:
+                continue
+            da, ra = c["deviation"](fr, L[law_a]), c["mean_ratio"](fr, L[law_a])
+            db = c["deviation"](fr, L[law_b]) if law_b else float("nan")
+            rb = c["mean_ratio"](fr, L[law_b]) if law_b else float("nan")
+            rows.append([f"{dim}D", c["FIT_LABEL"][fname], ", ".join(f"{v['a']:g}" for v in fr), f"{ra:.2f}", f"{da:.2f}",
+                         c["fmt"](rb), c["fmt"](db)])
+            key = da
+            if dim not in best or key < best[dim][1]:
+                best[dim] = (fname, key, da, db)
+    sh = res.get("analytic", {}).get("shear", [])
+    mu30 = lambda d, f: next((r["mu_eff"] for r in sh if r["dim"] == d and r["fit"] == f and r["phi"] == 30),  # noqa: E731
+                             float("nan"))
+    lines = [f"- {d}D: **{c['FIT_LABEL'][b[0]]}** (RMS log deviation {b[2]:.2f} from {'Lube 2005' if d == 2 else 'Lube 2004'};"
+             f" μ_eff = {mu30(d, b[0]):.3f} at φ_F = 30°, the thesis's fit {mu30(d, c['FITS'][0]):.3f})"
+             for d, b in sorted(best.items())]
+    lines.append("\nWhat the collapses ask for is the flowing friction, not a particular fit: the best fits of "
+                 "both dimensions give sand that flows at μ_eff ≈ " +
+                 " and ".join(f"{mu30(d, b[0]):.2f} ({d}D)" for d, b in sorted(best.items())) +
+                 " for φ_F = 30°. The material key `repose_angle` gives that friction directly, the same in 2D and "
+                 "3D, whatever the fit; the default stays the thesis's fit (the thesis's scenes and results "
+                 "depend on it).")
+    return f"""## 4. Which cone fit matches the collapses
+
+For each fit and dimension: the geometric-mean ratio of the simulated runout to each experimental
+law over the aspect ratios listed, and the RMS of log(simulated / law) (0.1 ≈ 10% typical deviation);
+the best fit is chosen by the deviation from Lube et al. (2005 in 2D, 2004 in 3D).
+
+{T(["d", "fit", "a", "mean ratio to Lube", "RMS log dev.", "mean ratio to Lajeunesse", "RMS log dev."], rows)}
+
+Closest to the experiments:
+
+""" + "\n".join(lines) + "\n"
+
+
+def base_condition(c):
+    res, T, fmt = c["res"], c["table"], c["fmt"]
+    rows = []
+    for fname in (c["FITS"][0], c["FITS"][3]):
+        sticky = {v["a"]: v for v in c["collapse_rows"](res, "collapse2d", 2, fname)}
+        for v in c["collapse_rows"](res, "base2d", 2, fname):
+            st = sticky.get(v["a"])
+            rows.append([c["FIT_LABEL"][fname], fmt(v["a"], 2), fmt(st["runout"]) if st else "–", fmt(v["runout"]),
+                         fmt(st["height"]) if st else "–", fmt(v["height"])])
+    if not rows:
+        return ""
+    return f"""## 5. Sticky against frictional base
+
+The thesis's ground is sticky (no slip). Experiments have rough or smooth bases with a basal friction
+of their own. The same 2D collapses on a Coulomb base (`mode = "separate"`, μ = 0.5, about 26.6°):
+
+{T(["fit", "a", "runout, sticky", "runout, μ = 0.5", "H∞/L0, sticky", "H∞/L0, μ = 0.5"], rows)}
+"""
+
+
+def analytic(c):
+    res, T = c["res"], c["table"]
+    an = res.get("analytic", {})
+    inc = an.get("incline", [])
+    irows = [[int(r["dim"]), r["setup"], r["mode"], f"{r['theta']:g}", f"{r['mu']:g}", f"{r['max_dt']:g}",
+              f"{r['expected']:.4f}", f"{r['measured']:.4f}", f"{r['rel_error']:.2e}"] for r in inc]
+    col = an.get("column", [])
+    crows = [[r["walls"].replace("_", " "), int(r["cells"]), int(r["particles"]), f"{r['err_syy']:.3e}",
+              f"{r['ratio_mean']:.4f}", f"{r['ratio_exact']:.4f}", f"{r['err_ratio']:.3e}"] for r in col]
+    orders = []
+    for walls in ("shifted", "on_grid_lines"):
+        cw = [r for r in col if r["walls"] == walls]
+        if len(cw) >= 2:
+            o = [math.log(cw[i]["err_syy"] / cw[i + 1]["err_syy"]) / math.log(cw[i]["dx"] / cw[i + 1]["dx"])
+                 for i in range(len(cw) - 1)]
+            o2 = [math.log(cw[i]["err_ratio"] / cw[i + 1]["err_ratio"]) / math.log(cw[i]["dx"] / cw[i + 1]["dx"])
+                  for i in range(len(cw) - 1)]
+            orders.append(f"walls {walls.replace('_', ' ')}: order of the σ_yy error between successive resolutions "
+                          + ", ".join(f"{x:.2f}" for x in o) + "; of the ratio error " + ", ".join(f"{x:.2f}" for x in o2))
+    colfig = f"\n![elastic column: error against dx (walls shifted)]({c['figs']['column']})\n" if "column" in c["figs"] else ""
+    return f"""## 6. Analytic benchmarks
+
+**Block on an incline** (`sm_validate incline`): an elastic block on a Coulomb plane (thesis §3.6.3),
+acceleration along the slope fitted over [0.05 s, end], against g (sin θ − μ cos θ) (0 when
+tan θ ≤ μ; the error is then the measured acceleration over g). "tilted": the plane turned in the grid
+(not grid aligned), "aligned": the plane on grid lines and gravity turned. Collider mode "separate"
+(unilateral contact), and "slip" (the normal velocity of nodes inside is removed both ways) for two
+cases.
+
+{T(["d", "set-up", "mode", "θ (°)", "μ", "max Δt (s)", "expected (m/s²)", "measured", "rel. error"], irows)}
+
+{sum(abs(r["rel_error"]) <= 1e-3 for r in inc)} of {len(inc)} cases are within 1e-3. Beyond it:
+{"; ".join(f"{r['setup']} {r['mode']} θ {r['theta']:g}° μ {r['mu']:g} ({r['rel_error']:+.2e})" for r in inc if abs(r["rel_error"]) > 1e-3) or "none"}.
+The failures are near or beyond the sliding threshold (tan 30° = 0.577): there the grid's Coulomb
+friction delivers less than μ times the normal force, so a block that should slide slowly slides
+too fast, and on the tilted (not grid aligned) separating plane a block that should stay (μ = 0.7)
+creeps (tests/test_incline.c holds that case on a slip plane). Why is not established here; a
+candidate is the normal support that reaches the block through grid nodes the contact test does not
+count (a separating contact counts a node only while its predicted φ̂ is below a tolerance), which
+carries no friction. Documented, not changed.
+
+**Gravity-loaded elastic column** (`sm_validate column`): 2D plane strain, H = 1 m, width H/4 between
+slip walls on a slip base, ρ 1000, E 1e7, ν 0.3, released stress free; the stress is averaged over 8
+periods of the column's oscillation (the average of a linear oscillation over whole periods is the
+equilibrium). Exact: σ_yy = −ρ g (H − y), σ_xx/σ_yy = ν/(1 − ν) = 0.4286. Stress per particle from its
+Fᴱ (Hencky, (3.70), Cauchy = τ/J), averaged in bins of dx in y; RMS errors over the bins (the ratio
+below 0.8 H). Run twice: walls exactly on grid lines (x = 0, x = W, y = 0), and moved 1e-6 dx into
+the column ("shifted"):
+
+{T(["walls", "cells over H", "particles", "σ_yy error", "σ_xx/σ_yy (mean)", "exact", "ratio error"], crows)}
+
+""" + "\n".join(f"- {o}." for o in orders) + f"""
+
+With the walls shifted the stress ratio is right to about 2% but the σ_yy error levels off at a few
+per cent instead of falling with dx, so no order of convergence of the method can be read from it.
+What limits it is not established here; candidates are the time average (APIC damps the oscillation a
+little, so the average over 8 periods is not exactly the equilibrium), the rows of particles at the
+free top and at the base, where the kernel reaches outside the material, and the finite strain
+(below 1e-3). With the walls on grid lines the errors are tens of per cent (the finding below).
+{colfig}
+**Finding: a slip collider does not hold grid nodes that lie exactly on its surface.** In
+src/collide/collide.c a slip collider acts on nodes with φ < 0 (strictly; a separating one on nodes
+whose predicted φ̂ is below a rounding tolerance, a sticky one likewise). A wall on a grid line
+therefore leaves the nodes on it free, and the material's boundary nodes are those: the column on
+walls on grid lines spreads sideways in Fᴱ (σ_xx/σ_yy far below ν/(1 − ν)) and its base sinks, while
+the same walls moved 1e-6 dx into the column give the uniaxial state. Every grid-aligned slip wall
+in a scene is affected — here the back wall of the 2D collapses and the symmetry planes of the 3D
+quarter columns and piles (x = 0, z = 0) — by an amount these runs do not measure. Not changed in this
+work (it changes the results of every such scene, and src/collide belongs to the core): a fix is to
+treat φ0 ≤ 0 (or φ̂ below the tolerance, as for separating contact) as contact for slip too.
+
+**Triaxial compression stress path** (tests/test_cone_fit.c, a unit test of the material functions):
+along σ = −(r c, c, c) the thesis's cone is first reached at r = (1 + sin φ)/(1 − sin φ), Mohr–Coulomb's
+ratio, for φ = 15°…45° (bisection on sm_dp_yield of the Hencky strains of those stresses); along the
+plane-strain path −(r c, (r + 1) c/2, c) the plane-strain fit is, and the thesis's cone is reached only
+at a larger r (above φ ≈ 42° never: its plane-strain strength is unbounded there); in 2D the
+plane-strain fit reaches it at Mohr–Coulomb's ratio on every path; the inscribed cone stays inside
+Mohr–Coulomb at every Lode angle and touches it.
+"""
+
+
+def pile_finding(c):
+    res, T = c["res"], c["table"]
+    piles = res.get("pile", {})
+    rows = []
+    for name, v in sorted(piles.items()):
+        if v["group"] not in ("pilexp", "heap"):
+            continue
+        s = dict(v["sets"])
+        rows.append([name, ", ".join(f"{k}={x}" for k, x in sorted(s.items())
+                               if not (k == "fit" and x == "triaxial_compression")),
+                     f"{v['angle']:.1f}", v["points"], f"{v['peak'] * 1000:.1f}", f"{v['front'] * 1000:.1f}"])
+    ref3 = piles.get("pile3_triaxial_compression_phi30")
+    ang = lambda k: piles[k]["angle"] if k in piles else float("nan")  # noqa: E731
+    b3 = ang("pile3_triaxial_compression_phi30")
+    pts = lambda k: piles[k]["points"] if k in piles else 0  # noqa: E731
+    finding = f"""
+The 3D piles here are small (dx 3 mm, a quarter pile of ~19 mm peak): their flank fits use only
+{pts("pile3_triaxial_compression_phi30")}–{pts("pile3_exp_finer")} surface bins, so single 3D numbers carry a few degrees of
+scatter; the 2D ones use 17–50 bins. What they say:
+
+- **The pile stands below atan μ_eff in both dimensions**, with or without a stream: 2D poured piles
+  (φ_F = 30°, thesis fit, μ_eff = 0.462, atan 24.8°) at {ang("pile2_exp_n2"):.1f}°, {ang("pile2_triaxial_compression_phi30"):.1f}°,
+  {ang("pile2_exp_n6"):.1f}° for n = 2, 4, 6 — no trend with resolution in 2D; a 2D heap built at 45° and let go
+  (no stream) at {ang("heap2_n4"):.1f}° and {ang("heap2_n8"):.1f}° (n = 4, 8), from 35° at {ang("heap2_slope35"):.1f}°. The flank
+  fails, avalanches and stops below the angle at which it flowed: this rate-independent cone has no
+  static friction above the dynamic one, and a layer decelerating on a slope below atan μ_eff keeps
+  moving until its momentum is gone.
+- **In 3D, resolution and the stream lower it further:** the 3D base pile {b3:.1f}°; one step finer
+  (2 mm) {ang("pile3_exp_finer"):.1f}°; poured at 0.1 m/s from 2.5 cm instead of 0.5 m/s from 4 cm
+  {ang("pile3_exp_slow"):.1f}° (against 34.7° = atan μ_eff). Issue 13's 24° at dx 1.5 mm (the thesis's scene,
+  implicit; these runs are explicit) lies within the scatter of these numbers.
+- **Not the departures from the thesis**: without particle projection the pile stands at
+  {ang("pile3_exp_noproj"):.1f}° (2D heap {ang("heap2_noproj"):.1f}°). A Coulomb plate (μ = 0.7) instead of the sticky one: 3D
+  {ang("pile3_exp_slipbase"):.1f}°, 2D heap {ang("heap2_friction"):.1f}°.
+- **Numerical dissipation raises it**: with PIC the heap stands at {ang("heap2_pic"):.1f}° and the 3D pile at
+  {ang("pile3_exp_pic"):.1f}° — PIC's damping freezes the avalanches (and PIC's collapse at a = 2 runs out a third
+  as far, section 8), so APIC's low dissipation is what lets the flank relax.
+- With the simple-shear fit (μ_eff = tan 30°) the 2D pile stands at {ang("pile2_simple_shear_phi30"):.1f}° and the
+  heap at {ang("heap2_ss"):.1f}°.
+
+No bug was found on the pile's path: particle projection does not move it, and replacing the sticky
+plate (with its catching of arriving nodes) by a Coulomb plate does not flatten it — in 3D it stands
+steeper, in 2D the same; nothing was changed. The flat pile and the steep collapse deposits are the same material seen
+on two paths: the collapse is stopped while flowing at μ_eff (3D: 0.693 for φ_F = 30°, steep), the
+pile's flank is what is left after avalanches that stop below it, in a flank resolved by few cells.
+"""
+    return f"""## 7. Why the poured pile is flatter than the input angle
+
+Issue 13 measured a pile poured from a spout (3D, φ_F = 30°, sticky plate, 20 g/s at 0.5 m/s, dx 1.5 mm)
+settling at about 24°, below φ_F and far below atan μ_eff = 34.7°, while collapse deposits stand too
+steep. Targeted runs, one thing changed at a time (pile3_exp_*: 3D, thesis fit, φ_F = 30°, from the
+3D pile of section 3{f', {ref3["angle"]:.1f}°' if ref3 else ''}; pile2_exp_n*: the 2D pile at two more
+resolutions; heap2_*: a 2D wedge (heap.lua) built at 45° (or 35°) at rest and let go, no stream; n =
+cells per 6 mm):
+
+{T(["run", "parameters", "flank angle (°)", "bins in the fit", "peak (mm)", "front (mm)"], rows)}
+""" + finding
+
+
+def convergence(c):
+    res, T, fmt = c["res"], c["table"], c["fmt"]
+    rows = []
+    for v in sorted((v for v in res["collapse"].values() if v["group"] in ("conv2d", "conv3d")),
+                    key=lambda v: (v["dim"], str(sorted(v["sets"].items())))):
+        s = v["sets"]
+        what = ", ".join(f"{k}={x}" for k, x in sorted(s.items()) if k not in ("a", "fit"))
+        rows.append([f"{v['dim']}D", what, fmt(v["runout"]), fmt(v["height"]), fmt(v["t_flow"] / v["tau"], 1),
+                     f"{v['wall_s']:.0f}"])
+    return f"""## 8. Convergence and numerical choices
+
+One collapse (a = 2, thesis fit, φ_F = 30°, sticky base) at three resolutions (n = cells across L0 or
+R0), with 16 instead of 4 particles per cell, the cubic kernel, PIC and FLIP (0.95) instead of APIC,
+and each departure from the thesis switched off (projection = particle_projection,
+sticks = static_friction_sticks):
+
+{T(["d", "parameters", "runout", "height", "t∞/√(H0/g)", "wall s"], rows)}
+"""
+
+
+def _ratio(c, group, dim, fit, law, amin=0, amax=99):
+    rows = [v for v in c["collapse_rows"](c["res"], group, dim, fit) if amin <= v["a"] <= amax]
+    return c["mean_ratio"](rows, law) if rows else float("nan")
+
+
+def honesty(c):
+    L, F = c["laws"], c["FITS"]
+    res = c["res"]
+    pct = lambda r: f"{100 * (r - 1):+.0f}%"  # noqa: E731
+    r2 = _ratio(c, "collapse2d", 2, F[0], L["lube2005"])
+    r2s = _ratio(c, "collapse2d", 2, F[3], L["lube2005"])
+    r3 = _ratio(c, "collapse3d", 3, F[0], L["lube2004"])
+    r3s = _ratio(c, "collapse3d", 3, F[3], L["lube2004"])
+    h3 = [v["height"] for v in c["collapse_rows"](res, "collapse3d", 3, F[0]) if v["a"] >= 2]
+    h2 = [(v["a"], v["height"]) for v in c["collapse_rows"](res, "collapse2d", 2, F[0]) if v["a"] >= 3]
+    h2r = math.exp(sum(math.log(h / L["lube2005_height"](a)) for a, h in h2) / len(h2)) if h2 else float("nan")
+    bs = [(v, {w["a"]: w for w in c["collapse_rows"](res, "collapse2d", 2, v["sets"]["fit"])}.get(v["a"]))
+          for v in res["collapse"].values() if v["group"] == "base2d"]
+    bs = [(f, s) for f, s in bs if s]
+    bchange = (math.exp(sum(math.log(f["runout"] / s["runout"]) for f, s in bs) / len(bs)) if bs else float("nan"))
+    an = res.get("analytic", {})
+    col = an.get("column", [])
+    last = lambda w: next((r["ratio_mean"] for r in reversed(col) if r["walls"] == w), float("nan"))  # noqa: E731
+    col_on, col_sh = f"{last('on_grid_lines'):.3f}", f"{last('shifted'):.3f}"
+    inc = [r for r in an.get("incline", []) if r["expected"] > 0]
+    fr = [abs(r["rel_error"]) for r in inc if r["mu"] > 0]
+    inc_worst = max(fr) if fr else float("nan")
+    inc_n = len(fr)
+    fz = [abs(r["rel_error"]) for r in inc if r["mu"] == 0]
+    inc_free = max(fz) if fz else float("nan")
+    return f"""## 9. Where the simulator differs from the experiments, and why
+
+- **2D runout, thesis fit:** on average {pct(r2)} against Lube et al. 2005 over the aspect ratios run
+  (geometric mean of simulated/law). Known reason: with d = 2 traces the thesis's α gives flowing
+  friction μ_eff = √2 α = 0.462 (24.8°) for φ_F = 30°, weaker than the sand of the experiments (section
+  3). With the simple-shear fit (μ_eff = tan 30°) the mean is {pct(r2s)}.
+- **3D runout, thesis fit:** {pct(r3)} against Lube et al. 2004 (simple-shear fit: {pct(r3s)}). In 3D the
+  thesis's cone flows at μ_eff = 0.693 (34.7°) for φ_F = 30°, stronger than its φ_F. Issue 13 found the
+  runout 35–40% short at a = 1–2 (R0/dx = 10 and 16); see section 2 for the values at this resolution.
+- **Final heights:** 2D, a ≥ 3: mean ratio to a^0.4 {h2r:.2f}; 3D, a ≥ 2: H∞/R0 =
+  {", ".join(f"{h:.2f}" for h in h3) or "–"} against the experiments' 0.74–0.9.
+- **Base:** a Coulomb base (μ = 0.5) instead of the sticky one changes the 2D runout by a factor
+  {bchange:.2f} on average (section 5); the experiments' rough bases are closer to sticky for the grains
+  that stop on them, but sliding over the base at the front is real in them and absent on a sticky
+  base.
+- **What the continuum model lacks:** no dilatancy (the flow rule keeps the volume; real sand dilates
+  when it starts to flow and compacts when it stops), no rate dependence (Drucker–Prager is rate
+  independent; granular friction grows with the inertial number I, μ(I)), no distinction between static
+  and dynamic friction (real piles stand at a repose angle a few degrees steeper than the one they
+  flow at), elasticity far softer than sand grains (E = 3.5e5 Pa: columns compress by ρ g H0 / E,
+  2.4% at H0 = 40 cm), and grid resolution: a front one or two cells thick has no resolved pressure,
+  so its thin layers spread further than a granular front (the front definition ignores layers
+  thinner than one particle spacing).
+- **Boundaries:** a slip collider does not hold the grid nodes on its surface (section 6, the elastic
+  column: σ_xx/σ_yy {col_on} with the walls on grid lines against {col_sh} with them moved by 1e-6 dx;
+  exact 0.429); the collapses' back wall and symmetry planes lie on grid lines. Coulomb friction on
+  the grid: the incline's friction cases are off by up to {inc_worst:.1%} of the expected acceleration
+  ({inc_n} cases; the frictionless ones within {inc_free:.0e}).
+- **Resolution:** runout and height still move with dx at these resolutions (section 8): the
+  numbers above are for the resolutions stated, not converged values.
+"""
+
+
+def document(c):
+    parts = [intro(c), collapse2d(c), collapse3d(c), friction(c), which_fit(c), base_condition(c), analytic(c),
+             pile_finding(c), convergence(c), honesty(c), REFERENCES]
+    return "\n".join(p for p in parts if p)

@@ -2,7 +2,7 @@
 # The validation study (docs/validation.md): builds Release, runs every simulation and analytic
 # benchmark of validation/ (validation/run.py; results in out/validation/full or .../quick), makes
 # the plots with gnuplot and writes docs/validation.md from the results (validation/report.py).
-#   scripts/validate.sh            the full study (about an hour on 2 free cores; runs already
+#   scripts/validate.sh            the full study (minutes on 2 cores: 77 runs took 163 s at 67e9065; runs already
 #                                  done with the same command are reused: rm -rf out/validation to redo)
 #   scripts/validate.sh --quick    a coarse subset (minutes); writes out/validation/quick/validation.md
 #                                  and leaves docs/ alone

@@ -111,6 +111,26 @@ def command(binary, j, out):
     return cmd
 
 
+def source_commit():
+    """The commit of the tree the runs are made from (git describe; '-dirty' with local changes)."""
+    r = subprocess.run(["git", "-C", os.path.join(HERE, ".."), "describe", "--always", "--dirty"],
+                       stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    return r.stdout.strip() or "unknown"
+
+
+def machine():
+    """CPU model and core count, from /proc/cpuinfo and os.cpu_count()."""
+    model = "unknown CPU"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{model}, {os.cpu_count()} logical cores"
+
+
 def run_one(binary, j, root):
     out = os.path.join(root, "runs", j["name"])
     cmd = command(binary, j, out)
@@ -123,7 +143,23 @@ def run_one(binary, j, root):
         raise RuntimeError(f"{j['name']}: exit {r.returncode}: {r.stderr[-800:]}")
     with open(stamp, "w") as f:
         f.write(shlex.join(cmd))
+    with open(os.path.join(out, "commit.txt"), "w") as f:
+        f.write(source_commit() + "\n" + machine() + "\n")
     return j["name"], time.time() - t0, False
+
+
+def run_provenance(jobs, root):
+    """How many runs were made at which commit on which machine (runs cached from before this was
+    recorded count as 'unrecorded')."""
+    seen = {}
+    for j in jobs:
+        try:
+            commit, mach = open(os.path.join(root, "runs", j["name"], "commit.txt")).read().splitlines()[:2]
+        except (OSError, ValueError):
+            commit, mach = "unrecorded", "unrecorded"
+        key = f"{commit} on {mach}"
+        seen[key] = seen.get(key, 0) + 1
+    return seen
 
 
 def frames(out):
@@ -260,6 +296,8 @@ def main():
     if not args.only:
         results["analytic"] = run_analytic(args.analytic, args.quick, root)
     results["wall_seconds"] = time.time() - t0
+    results["provenance"] = run_provenance(jobs, root)
+    results["report_machine"] = machine()
     with open(os.path.join(root, "results.json"), "w") as f:
         json.dump(results, f, indent=1)
     print(f"run.py: {len(jobs)} simulations, results in {root}/results.json ({time.time() - t0:.0f} s)")

@@ -28,6 +28,15 @@ Experiments scatter by 10–30% between materials and set-ups around these laws.
 """
 
 
+def provenance(r):
+    """Which commits and machines made the runs (run.py records it per run)."""
+    p = r.get("provenance")
+    if not p:
+        return "The commit and machine of the runs were not recorded."
+    parts = [f"{n} at {k}" for k, n in sorted(p.items())]
+    return "Runs: " + "; ".join(parts) + "."
+
+
 def intro(c):
     r = c["res"]
     mode = "quick (coarse) subset" if r["quick"] else "full study"
@@ -39,7 +48,7 @@ simulations, validation/report.py writes this file and the plots from out/valida
 every number and plot below is an output of that command; do not edit them by hand. This is the
 {mode}: {len(r['collapse']) + len(r.get('pile', {}))} simulations, {total / 60:.0f} minutes of wall time added over the runs
 (one thread per run, two runs at a time, on 2 cores shared with other work: the times in section 8
-are not benchmarks). Scenes: `validation/scenes/` (collapse2d.lua, collapse3d.lua,
+are not benchmarks). {provenance(r)} Scenes: `validation/scenes/` (collapse2d.lua, collapse3d.lua,
 pile.lua, heap.lua), runnable by themselves with `sandmpm run SCENE --set KEY=VALUE`.
 
 Sand everywhere: the thesis's Table 4.2 (ρ 2200 kg/m³, E 3.537e5 Pa, ν 0.3), a fixed friction angle

@@ -6,13 +6,15 @@ usage: run.py [--quick] [--bin build-release/sandmpm] [--analytic build-release/
               [--out out/validation] [--jobs 2] [--only GROUP[,GROUP...]]
 
 Every simulation is a `sandmpm run` of a scene in validation/scenes/ with --set parameters; a run
-whose output directory already holds a complete result for the same command is not run again
+whose output directory already holds a complete result for the same command and the same program
+(SHA-256 of the binary) is not run again
 (delete out/validation/runs to start over). --quick runs a coarse subset (minutes).
 The analytic benchmarks (incline, elastic column, material-point shear) are subcommands of
 sm_validate (validation/analytic.c), which prints CSV.
 """
 import argparse
 import concurrent.futures as cf
+import hashlib
 import json
 import math
 import os
@@ -111,6 +113,20 @@ def command(binary, j, out):
     return cmd
 
 
+_digests = {}
+
+
+def binary_digest(path):
+    """SHA-256 of the program file (computed once per run.py)."""
+    if path not in _digests:
+        h = hashlib.sha256()
+        with open(path, "rb") as f:
+            for chunk in iter(lambda: f.read(1 << 20), b""):
+                h.update(chunk)
+        _digests[path] = h.hexdigest()
+    return _digests[path]
+
+
 def source_commit():
     """The commit of the tree the runs are made from (git describe; '-dirty' with local changes)."""
     r = subprocess.run(["git", "-C", os.path.join(HERE, ".."), "describe", "--always", "--dirty"],
@@ -135,14 +151,17 @@ def run_one(binary, j, root):
     out = os.path.join(root, "runs", j["name"])
     cmd = command(binary, j, out)
     stamp = os.path.join(out, "command.txt")
-    if os.path.exists(stamp) and open(stamp).read() == shlex.join(cmd):
+    # A run is reused only for the same command AND the same program (its SHA-256): results are
+    # deterministic, so the same binary gives the same frames; a rebuilt program redoes the runs.
+    key = shlex.join(cmd) + "\n" + binary_digest(binary)
+    if os.path.exists(stamp) and open(stamp).read() == key:
         return j["name"], 0.0, True
     t0 = time.time()
     r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     if r.returncode != 0:
         raise RuntimeError(f"{j['name']}: exit {r.returncode}: {r.stderr[-800:]}")
     with open(stamp, "w") as f:
-        f.write(shlex.join(cmd))
+        f.write(key)
     with open(os.path.join(out, "commit.txt"), "w") as f:
         f.write(source_commit() + "\n" + machine() + "\n")
     return j["name"], time.time() - t0, False
@@ -231,7 +250,7 @@ def run_analytic(binary, quick, root):
     for sub in ["incline", "column", "shear"]:
         args = [binary, sub] + (["--quick"] if quick else [])
         path = os.path.join(root, f"analytic_{sub}.csv")
-        key = shlex.join(args) + f" {os.path.getmtime(binary):.0f}\n"
+        key = shlex.join(args) + " " + binary_digest(binary) + "\n"
         if os.path.exists(path) and open(path).readline() == key:
             text = open(path).read().split("\n", 1)[1]
         else:

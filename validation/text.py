@@ -355,16 +355,17 @@ little, so the average over 8 periods is not exactly the equilibrium), the rows 
 free top and at the base, where the kernel reaches outside the material, and the finite strain
 (below 1e-3). With the walls on grid lines the errors are tens of per cent (the finding below).
 {colfig}
-**Finding: a slip collider does not hold grid nodes that lie exactly on its surface.** In
-src/collide/collide.c a slip collider acts on nodes with φ < 0 (strictly; a separating one on nodes
-whose predicted φ̂ is below a rounding tolerance, a sticky one likewise). A wall on a grid line
-therefore leaves the nodes on it free, and the material's boundary nodes are those: the column on
-walls on grid lines spreads sideways in Fᴱ (σ_xx/σ_yy far below ν/(1 − ν)) and its base sinks, while
-the same walls moved 1e-6 dx into the column give the uniaxial state. Every grid-aligned slip wall
-in a scene is affected — here the back wall of the 2D collapses and the symmetry planes of the 3D
-quarter columns and piles (x = 0, z = 0) — by an amount these runs do not measure. Not changed in this
-work (it changes the results of every such scene, and src/collide belongs to the core): a fix is to
-treat φ0 ≤ 0 (or φ̂ below the tolerance, as for separating contact) as contact for slip too.
+**Finding, fixed: a slip collider did not hold grid nodes that lie exactly on its surface.** In
+src/collide/collide.c a slip collider acted on nodes with φ < 0 only (a separating one on nodes whose
+predicted φ̂ is below a rounding tolerance, a sticky one likewise). A wall on a grid line therefore
+left the nodes on it free, and the material's boundary nodes are those: at commit 0a862d6 this table
+read, for the walls on grid lines, σ_xx/σ_yy = 0.0104, 0.0749, 0.0859 and σ_yy errors 5.0e-01, 3.4e-01,
+2.2e-01 at 8, 16, 32 cells (the column spread sideways in Fᴱ and its base sank), while the walls
+moved 1e-6 dx into the column gave the uniaxial state. A slip collider now acts on nodes with φ ≤ 0
+(thesis (3.102): a node inside at tⁿ keeps its depth; on the surface, depth 0), and the two rows
+agree. Every grid-aligned slip wall was affected: the back wall of the 2D collapses and the symmetry
+planes of the 3D quarter columns and piles (x = 0, z = 0); every number in this document is from
+after the fix.
 
 **Triaxial compression stress path** (tests/test_cone_fit.c, a unit test of the material functions):
 along σ = −(r c, c, c) the thesis's cone is first reached at r = (1 + sin φ)/(1 − sin φ), Mohr–Coulomb's
@@ -403,24 +404,28 @@ scatter; the 2D ones use 17–50 bins. What they say:
   fails, avalanches and stops below the angle at which it flowed: this rate-independent cone has no
   static friction above the dynamic one, and a layer decelerating on a slope below atan μ_eff keeps
   moving until its momentum is gone.
-- **In 3D, resolution and the stream lower it further:** the 3D base pile {b3:.1f}°; one step finer
-  (2 mm) {ang("pile3_exp_finer"):.1f}°; poured at 0.1 m/s from 2.5 cm instead of 0.5 m/s from 4 cm
-  {ang("pile3_exp_slow"):.1f}° (against 34.7° = atan μ_eff). Issue 13's 24° at dx 1.5 mm (the thesis's scene,
-  implicit; these runs are explicit) lies within the scatter of these numbers.
-- **Not the departures from the thesis**: without particle projection the pile stands at
-  {ang("pile3_exp_noproj"):.1f}° (2D heap {ang("heap2_noproj"):.1f}°). A Coulomb plate (μ = 0.7) instead of the sticky one: 3D
-  {ang("pile3_exp_slipbase"):.1f}°, 2D heap {ang("heap2_friction"):.1f}°.
+- **In 3D, the symmetry planes were part of it.** The quarter pile lies against two slip planes on
+  grid lines (x = 0, z = 0), which until commit 0a862d6 did not hold the grid nodes on them (section
+  6, the elastic column): that pile stood at 20.7° (the document at 0a862d6); with the planes holding
+  their nodes it stands at {b3:.1f}°. One step finer (2 mm) {ang("pile3_exp_finer"):.1f}°; poured at 0.1 m/s from
+  2.5 cm instead of 0.5 m/s from 4 cm {ang("pile3_exp_slow"):.1f}° (against 34.7° = atan μ_eff): a gentler
+  stream stands steeper. Issue 13's 24° at dx 1.5 mm (the thesis's scene, implicit, full pile, before the fix)
+  is below these.
+- **Not particle projection**: without it the pile stands at {ang("pile3_exp_noproj"):.1f}° (2D heap
+  {ang("heap2_noproj"):.1f}°). A Coulomb plate (μ = 0.7) instead of the sticky one: 3D
+  {ang("pile3_exp_slipbase"):.1f}°, 2D heap {ang("heap2_friction"):.1f}° — the sticky plate, which catches arriving nodes,
+  is not what flattens the pile.
 - **Numerical dissipation raises it**: with PIC the heap stands at {ang("heap2_pic"):.1f}° and the 3D pile at
   {ang("pile3_exp_pic"):.1f}° — PIC's damping freezes the avalanches (and PIC's collapse at a = 2 runs out a third
   as far, section 8), so APIC's low dissipation is what lets the flank relax.
 - With the simple-shear fit (μ_eff = tan 30°) the 2D pile stands at {ang("pile2_simple_shear_phi30"):.1f}° and the
   heap at {ang("heap2_ss"):.1f}°.
 
-No bug was found on the pile's path: particle projection does not move it, and replacing the sticky
-plate (with its catching of arriving nodes) by a Coulomb plate does not flatten it — in 3D it stands
-steeper, in 2D the same; nothing was changed. The flat pile and the steep collapse deposits are the same material seen
-on two paths: the collapse is stopped while flowing at μ_eff (3D: 0.693 for φ_F = 30°, steep), the
-pile's flank is what is left after avalanches that stop below it, in a flank resolved by few cells.
+One bug was found on the pile's path and fixed: the slip planes of the quarter pile (above). Particle
+projection does not move the angle, and the sticky plate does not flatten it. What is left is the
+material: the flat pile and the steep collapse deposits are the same material seen on two paths: the
+collapse is stopped while flowing at μ_eff (3D: 0.693 for φ_F = 30°, steep), the pile's flank is what is
+left after avalanches that stop below it, in a flank resolved by few cells.
 """
     return f"""## 7. Why the poured pile is flatter than the input angle
 
@@ -508,9 +513,9 @@ def honesty(c):
   2.4% at H0 = 40 cm), and grid resolution: a front one or two cells thick has no resolved pressure,
   so its thin layers spread further than a granular front (the front definition ignores layers
   thinner than one particle spacing).
-- **Boundaries:** a slip collider does not hold the grid nodes on its surface (section 6, the elastic
-  column: σ_xx/σ_yy {col_on} with the walls on grid lines against {col_sh} with them moved by 1e-6 dx;
-  exact 0.429); the collapses' back wall and symmetry planes lie on grid lines. Coulomb friction on
+- **Boundaries:** slip walls on grid lines now hold their nodes (section 6, the elastic column:
+  σ_xx/σ_yy {col_on} with the walls on grid lines, {col_sh} with them moved by 1e-6 dx; exact 0.429;
+  before the fix 0.086 on grid lines). Coulomb friction on
   the grid: the incline's friction cases are off by up to {inc_worst:.1%} of the expected acceleration
   ({inc_n} cases; the frictionless ones within {inc_free:.0e}).
 - **Resolution:** runout and height still move with dx at these resolutions (section 8): the

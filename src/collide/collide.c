@@ -4,6 +4,8 @@
  * Collision acts on the deformed grid node x-hat = x_i + dt v (3.99):
  *   sticky    (no-slip, 3.100): a node inside at t^n takes the collider velocity v_b(x-hat);
  *   slip      (3.102):          a node inside at t^n keeps its depth, phi(x-hat) = phi(x_i^n);
+ *                               "inside" includes phi(x_i^n) = 0: a wall on a grid line holds the
+ *                               nodes on it (docs/validation.md, the elastic column);
  *   separate  (3.108):          phi(x-hat) >= max(0, phi(x_i^n)).
  * The unsatisfied constraint phi(x) = a (or >= a) is enforced by x <- x - (phi(x) - a) grad phi(x)
  * (3.105), i.e. v <- v - phi-hat grad phi(x-hat) / dt with phi-hat = phi(x-hat) - min(phi(x_i^n), 0).
@@ -380,7 +382,7 @@ void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3],
          * and its normal residual, the contact force, suddenly counts). */
         const double ctol = 1e-9 * (1.0 + fabs(xi[0]) + fabs(xi[1]) + fabs(xi[2]));
         int arriving = (mode == SM_COLLIDE_STICKY && phihat < ctol);
-        if ((mode == SM_COLLIDE_SEPARATE && phihat < ctol) || (mode == SM_COLLIDE_SLIP && phi0 < 0.0) || arriving) {
+        if ((mode == SM_COLLIDE_SEPARATE && phihat < ctol) || (mode == SM_COLLIDE_SLIP && phi0 <= 0.0) || arriving) {
             /* Beyond SM_MAX_NODE_CONTACTS the projection is still applied; only the record (and
              * so the friction of that contact) is dropped. */
             if (rec->count < SM_MAX_NODE_CONTACTS) {

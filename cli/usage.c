@@ -10,8 +10,9 @@ void cli_usage(FILE *f) {
                "  info SCENE      print the resolved scene (particles, grid, time steps, memory) without running it\n"
                "  render OUTDIR   turn a run's frames (OUTDIR/frame_NNNN.ply) into PNG images\n"
                "  bench           particle-steps/s per stage: 2D and 3D, float and double, 1 and 2 threads\n\n"
-               "  --help          this text; `sandmpm COMMAND --help` for a command's options\n"
-               "  --version       version and precision\n\n",
+               "  --help          this text; `sandmpm help COMMAND` or `sandmpm COMMAND --help` for a\n"
+               "                  command's options\n"
+               "  --version, -V   version and precision\n\n",
             sm_version());
     cli_print_exit_codes(f);
     fprintf(f, "scene format: docs/scene-format.md\n");

@@ -85,6 +85,18 @@ expect 0 "help" "$BIN" --help
 expect 0 "run help" "$BIN" run --help
 expect 0 "version" "$BIN" --version
 has "$TMP/out" "sandmpm" "version text"
+expect 0 "-V" "$BIN" -V
+has "$TMP/out" "precision)" "-V: the version text"
+expect 0 "help run" "$BIN" help run
+has "$TMP/out" "usage: sandmpm run" "help run: the run command's help"
+expect 0 "help render" "$BIN" help render
+has "$TMP/out" "usage: sandmpm render" "help render: the render command's help"
+expect 2 "help of an unknown command" "$BIN" help rnu
+has "$TMP/err" 'did you mean "run"' "help rnu: a suggestion"
+expect 2 "mistyped command" "$BIN" rendr
+has "$TMP/err" 'did you mean "render"' "rendr: a suggestion"
+expect 2 "far from every command" "$BIN" frobnicate
+grep -q "did you mean" "$TMP/err" && bad "frobnicate: a suggestion" || ok
 
 # render: a run directory to PNG; a missing directory is an I/O error (4); a corrupt frame is 2.
 expect 0 "render" "$BIN" render "$TMP/run_castle" --size 160x90

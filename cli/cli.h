@@ -55,6 +55,8 @@ void cli_usage_bench(FILE *f);
 int cli_help_requested(int argc, char **argv);
 /* A whole number in [lo, hi] (1), or 0. */
 int cli_parse_int(const char *s, long lo, long hi, int *out);
+/* Warns on stderr when `threads` exceeds the cores online (a mistake, not an error). */
+void cli_warn_threads(const char *cmd, int threads);
 /* A finite number (1), or 0. */
 int cli_parse_double(const char *s, double *out);
 

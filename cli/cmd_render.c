@@ -46,6 +46,7 @@ static sm_status parse_args(int argc, char **argv, render_args *a) {
                 fprintf(stderr, "sandmpm render: --threads: expected 1..1024, got \"%s\"\n", argv[i]);
                 return SM_ERR_INVALID;
             }
+            cli_warn_threads("render", a->threads);
         } else if (!strcmp(s, "--video")) {
             a->video = 1;
         } else if (s[0] == '-' || a->dir) {

@@ -94,6 +94,7 @@ int cli_parse_scene_opt(const char *cmd, int argc, char **argv, int *i, cli_scen
             return -1;
         }
         ++*i;
+        cli_warn_threads(cmd, so->threads);
         return 1;
     }
     return 0;
@@ -153,4 +154,13 @@ sm_status cli_remove_stale(const char *cmd, const char *dir) {
         fprintf(stderr, "sandmpm %s: removed %d temporary file%s (%s%s) that a killed process left in %s/\n", cmd, removed,
                 removed == 1 ? "" : "s", first, removed > 1 ? ", ..." : "", dir);
     return st;
+}
+
+void cli_warn_threads(const char *cmd, int threads) {
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    if (cores > 0 && threads > cores)
+        fprintf(stderr,
+                "sandmpm %s: warning: --threads %d on %ld cores: more threads than cores only slow the run down "
+                "(the results are the same for any thread count)\n",
+                cmd, threads, cores);
 }

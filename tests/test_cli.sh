@@ -96,6 +96,11 @@ has "$TMP/err" 'did you mean "run"' "help rnu: a suggestion"
 expect 2 "mistyped command" "$BIN" rendr
 has "$TMP/err" 'did you mean "render"' "rendr: a suggestion"
 expect 2 "far from every command" "$BIN" frobnicate
+cores=$(getconf _NPROCESSORS_ONLN)
+expect 0 "--threads above the cores" "$BIN" info --quality test --threads $((cores + 1))
+has "$TMP/err" "more threads than cores" "--threads $((cores + 1)) on $cores cores: the warning"
+expect 0 "--threads within the cores" "$BIN" info --quality test --threads 1
+grep -q "more threads than cores" "$TMP/err" && bad "--threads 1: a warning" || ok
 grep -q "did you mean" "$TMP/err" && bad "frobnicate: a suggestion" || ok
 
 # render: a run directory to PNG; a missing directory is an I/O error (4); a corrupt frame is 2.

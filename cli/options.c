@@ -105,7 +105,8 @@ static sm_status scene_status(int rc) { return rc == (int)SM_ERR_NOMEM ? SM_ERR_
 
 sm_status cli_load_scene(const char *cmd, const cli_scene_opts *so, sm_scene **sc) {
     char err[1024];
-    const char *path = so->scene ? so->scene : "default.lua";
+    /* The built-in scene is named for the file it was compiled from (messages say scenes/default.lua:LINE). */
+    const char *path = so->scene ? so->scene : "(built in) scenes/default.lua";
     const char *source = so->scene ? NULL : sm_default_scene;
     int rc = (int)sm_scene_load(path, source, so->params, so->nparams, so->quality, so->threads, sc, err, sizeof err);
     if (rc != 0) {

@@ -96,6 +96,8 @@ has "$TMP/err" 'did you mean "run"' "help rnu: a suggestion"
 expect 2 "mistyped command" "$BIN" rendr
 has "$TMP/err" 'did you mean "render"' "rendr: a suggestion"
 expect 2 "far from every command" "$BIN" frobnicate
+expect 2 "--set unknown key on the built-in scene" "$BIN" info --quality test --set foo=1
+has "$TMP/err" "(built in) scenes/default.lua" "the built-in scene's name in the message"
 cores=$(getconf _NPROCESSORS_ONLN)
 expect 0 "--threads above the cores" "$BIN" info --quality test --threads $((cores + 1))
 has "$TMP/err" "more threads than cores" "--threads $((cores + 1)) on $cores cores: the warning"

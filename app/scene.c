@@ -225,6 +225,12 @@ sm_status sm_scene_load(const char *path, const char *source, const sm_scene_par
 }
 
 const sm_scene_settings *sm_scene_get_settings(const sm_scene *s) { return &s->set; }
+
+int sm_scene_warning_count(const sm_scene *s) { return s ? s->nwarn : 0; }
+
+const char *sm_scene_warning(const sm_scene *s, int i) {
+    return s && i >= 0 && i < s->nwarn && i < SC_MAX_WARN ? s->warn[i] : NULL;
+}
 const sm_world_def *sm_scene_world_def(const sm_scene *s) { return &s->def; }
 int sm_scene_material_count(const sm_scene *s) { return s->nmat; }
 const char *sm_scene_material_name(const sm_scene *s, int id) {

@@ -65,6 +65,12 @@ sm_status sm_scene_load(const char *path, const char *source, const sm_scene_par
 
 const sm_scene_settings *sm_scene_get_settings(const sm_scene *s);
 
+/* Warnings: what looks like a mistake but is allowed ("PATH:LINE: key: ..."): an angle that looks
+ * like radians (sm_scene_load), sand seeded inside a collider (sm_scene_build). Count = warnings
+ * given so far; sm_scene_warning(s, i) is NULL for i beyond the first 16 (they are counted only). */
+int sm_scene_warning_count(const sm_scene *s);
+const char *sm_scene_warning(const sm_scene *s, int i);
+
 /* The world definition the scene asks for (threads included). */
 const sm_world_def *sm_scene_world_def(const sm_scene *s);
 

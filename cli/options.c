@@ -100,6 +100,17 @@ int cli_parse_scene_opt(const char *cmd, int argc, char **argv, int *i, cli_scen
     return 0;
 }
 
+/* Prints the scene's warnings from the first'th on. */
+static void print_warnings(const char *cmd, const sm_scene *sc, int first) {
+    int n = sm_scene_warning_count(sc);
+    for (int i = first; i < n; i++) {
+        const char *w = sm_scene_warning(sc, i);
+        if (w) fprintf(stderr, "sandmpm %s: warning: %s\n", cmd, w);
+    }
+    if (n > first && !sm_scene_warning(sc, n - 1))
+        fprintf(stderr, "sandmpm %s: %d warnings in all\n", cmd, n);
+}
+
 /* The scene loader's result codes (2 bad input, 5 out of memory) as a status. */
 static sm_status scene_status(int rc) { return rc == (int)SM_ERR_NOMEM ? SM_ERR_NOMEM : SM_ERR_INVALID; }
 
@@ -113,6 +124,7 @@ sm_status cli_load_scene(const char *cmd, const cli_scene_opts *so, sm_scene **s
         fprintf(stderr, "sandmpm %s: %s\n", cmd, err);
         return scene_status(rc);
     }
+    print_warnings(cmd, *sc, 0);
     return SM_OK;
 }
 
@@ -130,11 +142,13 @@ sm_status cli_check_memory(const char *cmd, const sm_scene_settings *st) {
 
 sm_status cli_build_scene(const char *cmd, sm_scene *sc) {
     char err[1024];
+    int before = sm_scene_warning_count(sc);
     int rc = (int)sm_scene_build(sc, err, sizeof err);
     if (rc != 0) {
         fprintf(stderr, "sandmpm %s: %s\n", cmd, err);
         return scene_status(rc);
     }
+    print_warnings(cmd, sc, before);
     return SM_OK;
 }
 

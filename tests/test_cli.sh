@@ -98,6 +98,26 @@ has "$TMP/err" 'did you mean "render"' "rendr: a suggestion"
 expect 2 "far from every command" "$BIN" frobnicate
 expect 2 "--set unknown key on the built-in scene" "$BIN" info --quality test --set foo=1
 has "$TMP/err" "(built in) scenes/default.lua" "the built-in scene's name in the message"
+# Warnings for what looks like a mistake: an angle in radians, sand seeded inside a collider (a
+# quarter of this box lies below the sticky ground at y = 0.25); the shipped scenes give none.
+cat > "$TMP/warn.lua" <<'EOF2'
+return {
+  dim = 2, dx = 0.05, ppc = 4, frames = 1,
+  domain = { min = {0, 0}, max = {1, 1} },
+  materials = { sand = { model = "sand", friction_angle = params.fa or 0.52 } },
+  objects = { { shape = { type = "box", center = {0.5, params.y or 0.3}, half_extent = {0.1, 0.1} }, material = "sand" } },
+  colliders = { { shape = { type = "halfspace", point = {0, 0.25}, normal = {0, 1} }, mode = "sticky" } },
+}
+EOF2
+expect 0 "warnings: info" "$BIN" info "$TMP/warn.lua"
+has "$TMP/err" "warn.lua:4: materials.sand.friction_angle: 0.52 looks like radians (0.52 rad = 29.8 degrees)" "radians warning"
+has "$TMP/err" "warn.lua:5: objects[1]: 16 of its 64 particles are seeded inside colliders[1]" "inside-collider warning"
+expect 0 "no warnings" "$BIN" info "$TMP/warn.lua" --set fa=30 --set y=0.5
+grep -q "warning" "$TMP/err" && bad "warnings for a sound scene: $(cat "$TMP/err")" || ok
+for f in "$SRC"/scenes/*.lua; do
+    "$BIN" info "$f" --quality test >/dev/null 2>"$TMP/err"
+    grep -q "warning" "$TMP/err" && bad "$f warns: $(cat "$TMP/err")" || ok
+done
 cores=$(getconf _NPROCESSORS_ONLN)
 expect 0 "--threads above the cores" "$BIN" info --quality test --threads $((cores + 1))
 has "$TMP/err" "more threads than cores" "--threads $((cores + 1)) on $cores cores: the warning"

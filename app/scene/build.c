@@ -26,12 +26,37 @@ static sm_status add_colliders(sm_scene *s, sm_world *w, char *err, size_t errle
     return SM_OK;
 }
 
+/* Particles [first, end) inside a collider (phi < 0 at t = 0; containers count from their inside
+ * out) are a mistake: they are pushed out or fall through the wall. One warning per object and
+ * collider. */
+static void warn_inside_colliders(sm_scene *s, sm_world *w, int obj, size_t first) {
+    sm_particles_view pv;
+    sm_world_particles(w, &pv);
+    for (int c = 0; c < s->ncol; c++) {
+        size_t inside = 0;
+        for (size_t i = first; i < pv.n; i++) {
+            double x[3] = {0, 0, 0};
+            for (int k = 0; k < pv.dim; k++) x[k] = (double)pv.x[i * (size_t)pv.dim + (size_t)k];
+            inside += sm_world_collider_distance(w, c, x, NULL) < 0;
+        }
+        if (inside == 0) continue;
+        char key[64], at[1100];
+        snprintf(key, sizeof key, "objects[%d]", obj + 1);
+        sc_warn_msg(s,
+                    "%s: %s: %zu of its %zu particles are seeded inside colliders[%d]; they will be pushed out of it "
+                    "or fall through it (make the object smaller or move the collider)",
+                    sc_where(s, key, at, sizeof at), key, inside, pv.n - first, c + 1);
+    }
+}
+
 static sm_status seed_objects(sm_scene *s, sm_world *w, char *err, size_t errlen) {
     for (int i = 0; i < s->nobj; i++) {
         scene_object *o = &s->objs[i];
         sm_seed_def sd = o->seed;
         sd.clip = o->has_clip ? &o->clip : NULL;
-        size_t added = 0;
+        sm_particles_view pv;
+        sm_world_particles(w, &pv);
+        size_t added = 0, before = pv.n;
         sm_status st = sm_world_seed_shape(w, &o->shape, &sd, &added);
         char key[64], at[1100];
         snprintf(key, sizeof key, "objects[%d]", i + 1);
@@ -43,6 +68,7 @@ static sm_status seed_objects(sm_scene *s, sm_world *w, char *err, size_t errlen
                                "%s: %s: no particles: no seeding point of the domain's usable region (2 cells inside its "
                                "walls) is inside the shape%s",
                                sc_where(s, key, at, sizeof at), key, o->has_clip ? " and its clip" : "");
+        warn_inside_colliders(s, w, i, before);
     }
     return SM_OK;
 }

@@ -129,6 +129,17 @@ static const char *const keys_mat[] = {"model", "density", "E", "nu", "friction_
                                        "repose_angle"};
 static const char *const cone_fits[] = {"triaxial_compression", "plane_strain", "inscribed", "simple_shear"};
 
+/* An angle in (0, pi/2] degrees is a sand that hardly holds together, and exactly what a value in
+ * radians looks like: say so (a warning; such sand is allowed). */
+static void warn_radians(vctx *v, const char *key, double degrees) {
+    if (!(degrees > 0 && degrees <= 1.5708)) return;
+    char a[32];
+    size_t old = sc_push_key(v, key);
+    sc_warn(v, "%s looks like radians (%s rad = %.1f degrees); angles are in degrees", sc_fmt_num(a, degrees),
+            sc_fmt_num(a, degrees), degrees * 180 / 3.14159265358979323846);
+    sc_pop_key(v, old);
+}
+
 /* Material keys cone_fit (sm_cone_fit, by name) and repose_angle: the angle theta of steady flow,
  * tan(theta) = mu_eff, turned into the friction angle of that fit in the scene's dimension
  * (sm_friction_angle_for_effective_friction; docs/validation.md). Returns the friction angle, or
@@ -138,6 +149,7 @@ static double parse_cone_fit(vctx *v, int t, sm_material_def *m) {
     int has;
     double theta = sc_num_field(v, t, "repose_angle", 0, &has, 0.0, 1, 90.0, 0);
     if (!has) return -1;
+    warn_radians(v, "repose_angle", theta);
     double phi = sm_friction_angle_for_effective_friction(tan(theta * 3.14159265358979323846 / 180), m->cone_fit,
                                                           v->s->def.dim);
     char a[32];
@@ -172,6 +184,7 @@ static void parse_material(vctx *v, int t, sm_material_def *out) {
     int has_fa, has_h = sc_get(v, t, "hardening") != LUA_TNIL;
     lua_pop(v->L, 1);
     double fa = sc_num_field(v, t, "friction_angle", 0, &has_fa, SC_NOLIM);
+    if (has_fa) warn_radians(v, "friction_angle", fa);
     double fa_repose = parse_cone_fit(v, t, &m);
     if (fa_repose >= 0) {
         if (has_fa || model == 1)

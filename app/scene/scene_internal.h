@@ -73,6 +73,9 @@ typedef struct scene_param {
     int used;
 } scene_param;
 
+#define SC_MAX_WARN 16
+#define SC_WARN_LEN 640
+
 struct sm_scene {
     lua_State *L;
     size_t mem, mem_limit;
@@ -108,6 +111,8 @@ struct sm_scene {
     sm_world *world;
     int built;
     char motion_err[1024];
+    int nwarn;                           /* warnings given (more than SC_MAX_WARN are counted only) */
+    char warn[SC_MAX_WARN][SC_WARN_LEN]; /* "PATH:LINE: key: what looks wrong" */
 };
 
 /* ---- small helpers (schema.c) ---- */
@@ -116,6 +121,12 @@ char *sc_dup_str(const char *s);
 const char *sc_fmt_num(char buf[32], double x);                 /* %g; NaN and infinities spelled out */
 const char *sc_closest(const char *word, const char *const *cands, int n); /* a likely typo's fix, or NULL */
 int sc_is_identifier(const char *s);
+/* Records a warning (already located: "PATH:LINE: ..."); the program prints them. */
+void sc_warn_msg(sm_scene *s, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
 sm_status sc_fail_msg(char *err, size_t errlen, sm_status code, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))
@@ -159,6 +170,12 @@ void sc_pop_key(vctx *v, size_t old);
 __attribute__((format(printf, 2, 3), noreturn))
 #endif
 void sc_fail(vctx *v, const char *fmt, ...);
+/* A warning at the current key (located as sc_fail's messages); the load goes on. */
+void sc_warn(vctx *v, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
 /* A library check's message "field: problem": the field is mapped to the scene's key through
  * map (pairs {library name, scene key}, ending with NULL; an unmapped field keeps the current
  * path) and the message raised with the path and line. */

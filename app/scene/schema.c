@@ -181,25 +181,52 @@ static void last_name(const vctx *v, char *out, size_t n) {
     out[len] = 0;
 }
 
-void sc_fail(vctx *v, const char *fmt, ...) {
-    char msg[768], name[128], out[2400];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
+/* "PATH:LINE: key.path: msg" for the current key (the line found by the constructors' walk, or the
+ * one line with `name =`). */
+static void located(vctx *v, const char *msg, char *out, size_t n) {
+    char name[128];
     int line = v->plen ? sc_locate(v->s->source, v->s->source_len, v->path) : 0;
-    if (line <= 0) { /* not found by the constructors' walk: the one line with `name =`, if any */
+    if (line <= 0) {
         last_name(v, name, sizeof name);
         line = key_line(v->s->source, name);
     }
     char where[1100];
     if (line > 0) snprintf(where, sizeof where, "%s:%d", v->s->path, line);
     else snprintf(where, sizeof where, "%s", v->s->path);
-    if (v->plen) snprintf(out, sizeof out, "%s: %s: %s", where, v->path, msg);
-    else snprintf(out, sizeof out, "%s: %s", where, msg);
+    if (v->plen) snprintf(out, n, "%s: %s: %s", where, v->path, msg);
+    else snprintf(out, n, "%s: %s", where, msg);
+}
+
+void sc_fail(vctx *v, const char *fmt, ...) {
+    char msg[768], out[2400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    located(v, msg, out, sizeof out);
     lua_pushstring(v->L, out);
     lua_error(v->L);
     abort(); /* not reached */
+}
+
+void sc_warn(vctx *v, const char *fmt, ...) {
+    char msg[512], out[2400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    located(v, msg, out, sizeof out);
+    sc_warn_msg(v->s, "%s", out);
+}
+
+void sc_warn_msg(sm_scene *s, const char *fmt, ...) {
+    if (s->nwarn < SC_MAX_WARN) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(s->warn[s->nwarn], SC_WARN_LEN, fmt, ap);
+        va_end(ap);
+    }
+    s->nwarn++;
 }
 
 /* Describes the value at idx for "got ...". */

@@ -206,7 +206,7 @@ sm_status sm_scene_load(const char *path, const char *source, const sm_scene_par
     set_name(s, path);
     s->def = sm_world_def_default();
     s->def.threads = threads;
-    s->mem_limit = SCENE_MEM_LIMIT;
+    s->mem_limit = sc_scene_limits.mem;
     st = copy_params(s, params, nparams, err, errlen);
     if (st == SM_OK && source) {
         if ((s->source = sc_dup_str(source)) != NULL) s->source_len = strlen(source);

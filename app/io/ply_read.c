@@ -122,8 +122,9 @@ static sm_status read_binary(FILE *fp, unsigned long long fsize, const char *pat
         return SM_ERR_IO;
     }
     const int swap = (h->format == PLY_BE) != host_is_big_endian();
-    size_t per = (4u << 20) / stride; /* records per chunk of about 4 MiB */
+    size_t per = (4u << 20) / stride; /* records per chunk of about 4 MiB (no more than the file has) */
     if (per == 0) per = 1;
+    if (n > 0 && (unsigned long long)per > n) per = (size_t)n;
     unsigned char *data = malloc(per * stride);
     if (!data) {
         snprintf(err, errlen, "%s: out of memory", path);

@@ -42,7 +42,7 @@
 #define CLOCK_EVERY 16000 /* units of work between two looks at the clocks */
 #define WALL_FACTOR 10    /* wall-clock limit = WALL_FACTOR x the CPU-time limit */
 
-sc_limits sc_scene_limits = {SCENE_INSN_LIMIT, MOTION_INSN_LIMIT, SCENE_TIME_LIMIT, MOTION_TIME_LIMIT};
+sc_limits sc_scene_limits = {SCENE_INSN_LIMIT, MOTION_INSN_LIMIT, SCENE_TIME_LIMIT, MOTION_TIME_LIMIT, SCENE_MEM_LIMIT};
 
 sm_scene *sc_scene_of(lua_State *L) { return *(sm_scene **)lua_getextraspace(L); }
 

@@ -137,10 +137,11 @@ sm_status sc_fail_msg(char *err, size_t errlen, sm_status code, const char *fmt,
 sm_scene *sc_scene_of(lua_State *L);
 lua_State *sc_sandbox_new(sm_scene *s);           /* NULL if out of memory */
 int sc_sandbox_init(lua_State *L);                /* lua_CFunction: libraries, globals, params */
-/* The limits in force (tests may lower them); the defaults are the SCENE_ and MOTION_ constants. */
+/* The limits in force (tests and the fuzz harness tests/fuzz/fuzz_scene.c may lower them); the defaults are the SCENE_ and MOTION_ constants. */
 typedef struct sc_limits {
     long long scene_insn, motion_insn;
     double scene_time, motion_time;
+    size_t mem;                   /* bytes of Lua memory (SCENE_MEM_LIMIT) */
 } sc_limits;
 extern sc_limits sc_scene_limits;
 /* A new budget from now on: limit instructions (and charged work) and seconds (CPU time) for what. */

@@ -7,6 +7,7 @@
 
 #include <dirent.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 #include "app/checkpoint.h"
 #include "app/io/files.h"
@@ -241,6 +242,10 @@ static sm_status resume_world(const run_args *a, sm_world *w, const char *out, u
         int f;
         char tail[8];
         if (sscanf(e->d_name, "ckpt_%d.sm%7s", &f, tail) == 2 && !strcmp(tail, "c")) frames[n++] = f;
+        if (!strncmp(e->d_name, ".ckpt_", 6) && strstr(e->d_name, ".tmp.")) { /* a killed run's */
+            char p[SM_PATH_MAX];
+            if (snprintf(p, sizeof p, "%s/%s", dir, e->d_name) < (int)sizeof p) unlink(p);
+        }
     }
     if (d) closedir(d);
     for (;;) {

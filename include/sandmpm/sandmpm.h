@@ -345,7 +345,7 @@ typedef struct sm_particles_view {
     const sm_real *q;     /**< hardening state, n */
     const sm_real *alpha; /**< Drucker–Prager alpha, n */
     const uint16_t *material; /**< material id, n */
-    const uint64_t *id;   /**< stable particle id, n: 0, 1, 2, ... in order of insertion (seeding,
+    const uint32_t *id;   /**< stable particle id, n: 0, 1, 2, ... in order of insertion (seeding,
                                sm_world_add_particles, emitters); kept through the step's reorders
                                and through checkpoints */
 } sm_particles_view;

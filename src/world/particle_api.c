@@ -51,7 +51,7 @@ sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions,
         P->vol0[p] = (sm_real)vol0;
         P->alpha[p] = m->alpha0;
         P->mat[p] = (uint16_t)material;
-        P->id[p] = w->next_id++;
+        P->id[p] = (uint32_t)w->next_id++;
     }
     P->n = first + n;
     w->dirty = 1;

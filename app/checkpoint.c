@@ -172,14 +172,61 @@ sm_status sm_checkpoint_read(const char *path, unsigned char **stream, size_t *l
     return SM_OK;
 }
 
+/* The sink keeps the last frame's state in memory (one sm_world_save per frame: a copy of the
+ * particle arrays), so that a numerical failure in the next frame can still write it. */
+typedef struct ckpt_state {
+    membuf last;      /* the stream of frame last_frame */
+    int last_frame;   /* -1: none */
+    const char *out;  /* the output folder */
+    const sm_world *w;
+} ckpt_state;
+
+static sm_status ckpt_begin(sm_sink *s, const sm_run_info *run, char *err, size_t errlen) {
+    ckpt_state *c = calloc(1, sizeof *c);
+    if (!c) {
+        snprintf(err, errlen, "out of memory");
+        return SM_ERR_NOMEM;
+    }
+    c->last_frame = -1;
+    c->out = run->out_dir;
+    c->w = run->w;
+    s->state = c;
+    return SM_OK;
+}
+
 static sm_status ckpt_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t errlen) {
     const sm_checkpoint_config *c = s->config;
+    ckpt_state *cs = s->state;
+    cs->last.len = 0;
+    cs->last_frame = sm_world_save(fr->w, mem_write, &cs->last) == SM_OK ? fr->frame : -1;
     if (c->every <= 0 || fr->frame == 0 || fr->frame % c->every != 0) return SM_OK;
     char path[SM_PATH_MAX];
     return sm_checkpoint_write(fr->out_dir, fr->w, fr->frame, c->scene_hash, c->keep, path, sizeof path, err, errlen);
 }
 
+/* After a numerical failure: the last good frame's state written as its checkpoint. */
+static sm_status ckpt_end(sm_sink *s, sm_status run_status, char *err, size_t errlen) {
+    const sm_checkpoint_config *c = s->config;
+    ckpt_state *cs = s->state;
+    sm_status st = SM_OK;
+    if (run_status == SM_ERR_NUMERICAL && cs->last_frame >= 0) {
+        sm_world *good;
+        char e2[256], path[SM_PATH_MAX];
+        st = sm_world_load(cs->last.data, cs->last.len, &good, e2, sizeof e2);
+        if (st == SM_OK) {
+            st = sm_checkpoint_write(cs->out, good, cs->last_frame, c->scene_hash, c->keep, path, sizeof path, err, errlen);
+            sm_world_destroy(good);
+        } else {
+            snprintf(err, errlen, "the last good state: %s", e2);
+        }
+    }
+    free(cs->last.data);
+    free(cs);
+    s->state = NULL;
+    return st;
+}
+
 sm_sink sm_sink_checkpoint(const sm_checkpoint_config *config) {
-    sm_sink s = {"checkpoint", config, NULL, NULL, ckpt_frame, NULL};
+    sm_sink s = {"checkpoint", config, NULL, ckpt_begin, ckpt_frame, ckpt_end};
     return s;
 }

@@ -194,6 +194,9 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
         else
             fprintf(stderr, "sandmpm run: could not write the checkpoint: %s\n", e2);
     }
+    if (s == SM_ERR_NUMERICAL && a->ckpt_every > 0 && res.frames_written > 0)
+        fprintf(stderr, "sandmpm run: the last good state (frame %d) is in %s/checkpoints/ckpt_%08d.smc\n",
+                res.frames_written - 1, out, res.frames_written - 1);
     if (s != SM_OK || *stopped) say_what_is_complete(out, res.frames_written, nframes);
     return s;
 }

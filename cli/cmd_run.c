@@ -31,7 +31,7 @@ static sm_status parse_args(int argc, char **argv, run_args *a) {
     memset(a, 0, sizeof *a);
     a->frames = -1;
     a->end = -1;
-    a->ckpt_every = CLI_CHECKPOINT_EVERY;
+    a->ckpt_every = -1; /* the scene's checkpoint_every, else CLI_CHECKPOINT_EVERY */
     a->keep = 2;
     for (int i = 0; i < argc; i++) {
         const char *s = argv[i];
@@ -315,6 +315,7 @@ static int run_command(int argc, char **argv) {
     }
     if (st == SM_OK) st = prepare_folder(out);
     const uint64_t hash = scene_hash(&a.so);
+    if (a.ckpt_every < 0) a.ckpt_every = set->checkpoint_every >= 0 ? set->checkpoint_every : CLI_CHECKPOINT_EVERY;
     int first = 0;
     if (st == SM_OK && a.resume) st = resume_world(&a, sm_scene_world(sc), out, hash, &first);
     if (st == SM_OK) {

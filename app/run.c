@@ -40,7 +40,8 @@ static sm_status frame_loop(const sm_run_config *cfg, sm_sink *sinks, int nsinks
     fr.w = cfg->info.w;
     fr.d = &d;
     fr.start_wall = sm_run_wall();
-    for (int f = 0; f <= cfg->info.frames; f++) {
+    res->frames_written = cfg->info.first_frame;
+    for (int f = cfg->info.first_frame; f <= cfg->info.frames; f++) {
         if (f > 0) {
             if (cfg->stop && *cfg->stop) {
                 res->stopped = 1;

@@ -23,6 +23,8 @@ typedef struct sm_run_info {
     sm_world *w;         /* the world, built */
     int frames;          /* frames after frame 0 */
     double fps;          /* frames per second of simulated time */
+    int first_frame;     /* the first frame the loop hands to the sinks: 0, or after a resume from a
+                            checkpoint of frame F, F + 1 (the world is then at F's time) */
 } sm_run_info;
 
 /* One frame as the sinks see it. */
@@ -62,7 +64,7 @@ typedef struct sm_run_result {
     const char *failed_sink; /* the sink whose begin, frame or end failed, or NULL */
 } sm_run_result;
 
-/* Runs frames 0..info.frames through the sinks. Returns SM_OK, or the first failure's status
+/* Runs frames info.first_frame..info.frames through the sinks. Returns SM_OK, or the first failure's status
  * with its message in err (a world's failure: the frame, the times and its sm_world_errmsg). */
 sm_status sm_run_frames(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm_run_result *res, char *err,
                         size_t errlen);

@@ -43,6 +43,7 @@ typedef struct sm_scene_settings {
     char name[128];                 /* file stem, e.g. "castle" ("scene" without a path) */
     double fps;                     /* frames per second (default 24) */
     int frames;                     /* frames after frame 0 (from `frames`, or ceil(end_time * fps)) */
+    int checkpoint_every;           /* `checkpoint_every` (frames, 0: none), or -1 if not given */
     double end_time;                /* = frames / fps, s */
     int out_ply, out_vtk, out_csv;  /* the outputs table; defaults all 1 */
     size_t estimated_particles;     /* particles the objects will seed (before seeding) */

@@ -37,6 +37,51 @@ static void *new_state(size_t size, char *err, size_t errlen) {
     return p;
 }
 
+/* After a resume from frame first - 1 (run->first_frame = first > 0): the rows of frames before
+ * first that the interrupted run wrote into path (read before the stream truncates it), so that an
+ * accumulating file holds every frame once. NULL if there is nothing to carry (or no memory: the
+ * file then starts at the resumed frame). */
+static char *rows_before(const char *path, int first) {
+    if (first <= 0) return NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    size_t cap = 1 << 16, n = 0;
+    char *buf = malloc(cap), *out = NULL;
+    size_t k;
+    while (buf && (k = fread(buf + n, 1, cap - n - 1, f)) > 0) {
+        n += k;
+        if (n + 1 == cap) {
+            char *q = realloc(buf, cap *= 2);
+            if (!q) break;
+            buf = q;
+        }
+    }
+    fclose(f);
+    if (buf && (out = malloc(n + 1))) {
+        buf[n] = 0;
+        size_t o = 0;
+        for (char *line = buf; *line;) {
+            char *end = strchr(line, '\n');
+            size_t len = end ? (size_t)(end - line) + 1 : strlen(line);
+            if (end && line[0] >= '0' && line[0] <= '9' && atoi(line) < first) {
+                memcpy(out + o, line, len);
+                o += len;
+            }
+            line += len;
+        }
+        out[o] = 0;
+    }
+    free(buf);
+    return out;
+}
+
+/* Appends the carried rows (and frees them). */
+static sm_status carry_rows(sm_stream *f, char *rows, char *err, size_t errlen) {
+    sm_status st = rows && rows[0] ? sm_stream_append(f, rows, strlen(rows), err, errlen) : SM_OK;
+    free(rows);
+    return st;
+}
+
 /* The end of a begin: with st SM_OK the sink keeps p as its state, else p is freed. */
 static sm_status keep_state(sm_sink *s, void *p, sm_status st) {
     if (st != SM_OK) {
@@ -75,10 +120,23 @@ typedef struct vtk_state {
     double *times; /* their times */
 } vtk_state;
 
+static int vtk_grow(vtk_state *v);
+
+/* After a resume, frames.pvd lists the frames before it too (their files are on disk; frame f's
+ * time is f / fps exactly, as the frame loop lands on it). */
 static sm_status vtk_begin(sm_sink *s, const sm_run_info *run, char *err, size_t errlen) {
-    (void)run;
     vtk_state *v = new_state(sizeof *v, err, errlen);
-    return v ? keep_state(s, v, SM_OK) : SM_ERR_NOMEM;
+    if (!v) return SM_ERR_NOMEM;
+    for (int f = 0; f < run->first_frame; f++) {
+        char name[48];
+        snprintf(name, sizeof name, "frame_%04d.vtp", f);
+        if (!vtk_grow(v) || !(v->names[v->count] = strdup(name))) {
+            snprintf(err, errlen, "out of memory");
+            return SM_ERR_NOMEM; /* the partial list is leaked only in this failure */
+        }
+        v->times[v->count++] = f / run->fps;
+    }
+    return keep_state(s, v, SM_OK);
 }
 
 static int vtk_grow(vtk_state *v) {
@@ -145,7 +203,10 @@ static sm_status manifest_begin(sm_sink *s, const sm_run_info *run, char *err, s
         snprintf(err, errlen, "out of memory");
         st = SM_ERR_NOMEM;
     }
+    char *rows = st == SM_OK ? rows_before(path, run->first_frame) : NULL;
     if (st == SM_OK) st = sm_stream_open(&m->poses, path, err, errlen); /* fails if poses.csv is a folder */
+    if (st == SM_OK) st = carry_rows(&m->poses, rows, err, errlen);
+    else free(rows);
     if (st != SM_OK) free(m->lines);
     return keep_state(s, m, st);
 }
@@ -220,8 +281,13 @@ static sm_status csv_begin(sm_sink *s, const sm_run_info *run, char *err, size_t
     if (!c) return SM_ERR_NOMEM;
     char path[SM_PATH_MAX], line[SM_CSV_LINE_MAX];
     sm_status st = join(path, sizeof path, run->out_dir, "diagnostics.csv", err, errlen);
+    char *rows = st == SM_OK ? rows_before(path, run->first_frame) : NULL;
     if (st == SM_OK) st = sm_stream_open(&c->f, path, err, errlen);
-    if (st == SM_OK && (st = sm_stream_append(&c->f, line, (size_t)sm_csv_header(line, sizeof line), err, errlen)) != SM_OK) {
+    const int opened = st == SM_OK;
+    if (st == SM_OK) st = sm_stream_append(&c->f, line, (size_t)sm_csv_header(line, sizeof line), err, errlen);
+    if (st == SM_OK) st = carry_rows(&c->f, rows, err, errlen);
+    else free(rows);
+    if (st != SM_OK && opened) {
         char ignored[8];
         sm_stream_close(&c->f, 1, ignored, sizeof ignored); /* the append's message is the one to keep */
     }

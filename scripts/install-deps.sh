@@ -5,7 +5,7 @@ set -euo pipefail
 
 # libassimp-dev: mesh files. python3-*: the Python package (cffi in ABI mode, NumPy views) and its
 # tests (pytest, run by CTest). gnuplot-nox: the validation study's plots (scripts/validate.sh).
-PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev python3 python3-cffi python3-numpy python3-pytest libassimp-dev gnuplot-nox)
+PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev zlib1g-dev python3 python3-cffi python3-numpy python3-pytest libassimp-dev gnuplot-nox)
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -13,7 +13,7 @@
 
 static const char *const keys_top[] = {"dim", "dx", "ppc", "kernel", "transfer", "flip_ratio", "integrator", "cfl",
                                        "max_dt", "elastic_cfl", "newton_tolerance", "newton_max_iterations",
-                                       "gmres_max_iterations", "gmres_tolerance", "fps", "frames", "end_time",
+                                       "gmres_max_iterations", "gmres_tolerance", "fps", "frames", "end_time", "checkpoint_every",
                                        "gravity", "seed", "domain",
                                        "static_friction_sticks", "particle_projection", "materials", "objects",
                                        "colliders", "emitters", "outputs", "camera"};
@@ -74,7 +74,7 @@ static double parse_world_numbers(vctx *v, int top) {
     return ppc;
 }
 
-/* fps, frames | end_time. */
+/* fps, frames | end_time, checkpoint_every. */
 static void parse_time(vctx *v, int top) {
     sm_scene *s = v->s;
     s->set.fps = sc_num_field(v, top, "fps", 24, NULL, 0.0, 0, 1e6, 1);
@@ -90,6 +90,9 @@ static void parse_time(vctx *v, int top) {
     }
     s->set.frames = (int)frames;
     s->set.end_time = (double)frames / s->set.fps;
+    int has_ckpt;
+    long long every = sc_int_field(v, top, "checkpoint_every", 0, &has_ckpt, 0, 10000000);
+    s->set.checkpoint_every = has_ckpt ? (int)every : -1;
 }
 
 static void parse_domain(vctx *v, int top) {

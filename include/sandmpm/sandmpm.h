@@ -345,6 +345,9 @@ typedef struct sm_particles_view {
     const sm_real *q;     /**< hardening state, n */
     const sm_real *alpha; /**< Drucker–Prager alpha, n */
     const uint16_t *material; /**< material id, n */
+    const uint32_t *id;   /**< stable particle id, n: 0, 1, 2, ... in order of insertion (seeding,
+                               sm_world_add_particles, emitters); kept through the step's reorders
+                               and through checkpoints */
 } sm_particles_view;
 
 SM_API void sm_world_particles(const sm_world *w, sm_particles_view *out);
@@ -519,6 +522,37 @@ SM_API void sm_world_reset_step_stats(sm_world *w);
 
 /** A 64-bit hash of all particle state (bitwise), for determinism checks. */
 SM_API uint64_t sm_world_state_hash(const sm_world *w);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Checkpoints (docs/checkpoints.md)                                                            */
+
+/** Receives the next len bytes of a checkpoint; returns 0 on success, non-zero to abort the save
+ *  (sm_world_save then returns SM_ERR_IO). The embedder picks the storage: a file, memory, ... */
+typedef int (*sm_write_fn)(void *user, const void *data, size_t len);
+
+/** Writes the world's complete state through write: a versioned header (magic "SANDMPMC", format
+ *  version, precision, dimension), the world definition, materials, colliders (definitions and
+ *  their motion state), emitters (definitions, owed mass, emitted count: their whole RNG state),
+ *  the clock, the time-step controller, the statistics and every particle field. A world loaded
+ *  from it (sm_world_load, or sm_world_restore into a world built the same way) continues
+ *  bitwise identically to this one, whatever the thread count. Motion functions cannot be
+ *  saved: only whether a collider had one. Returns SM_OK or SM_ERR_IO (write failed). No
+ *  checksum inside: a file layer adds one (the CLI does). */
+SM_API sm_status sm_world_save(const sm_world *w, sm_write_fn write, void *user);
+
+/** Creates a world from a checkpoint held in memory (len bytes). Colliders come back without
+ *  motion functions (use sm_world_restore on a world built with them instead). Rejects a wrong
+ *  magic, version, precision (float/double build), byte order, an invalid definition, a
+ *  truncated or inconsistent stream with SM_ERR_INVALID and the reason in err; never reads
+ *  outside [data, data + len). */
+SM_API sm_status sm_world_load(const void *data, size_t len, sm_world **out, char *err, size_t errlen);
+
+/** Replaces the evolving state of w (particles, clock, controller, statistics, collider poses,
+ *  emitter counters) by a checkpoint's. w must have been built like the saved world (same
+ *  definition, materials, colliders, emitters, in the same order: the counts, dim, dx,
+ *  integrator, transfer and kernel are checked); w keeps its own definitions, so motion
+ *  functions stay attached. On failure w is unchanged and the message says why. */
+SM_API sm_status sm_world_restore(sm_world *w, const void *data, size_t len);
 
 #ifdef __cplusplus
 }

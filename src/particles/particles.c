@@ -122,7 +122,7 @@ void sm_particles_unpack(sm_particles *p, int dim, size_t i, const void *buf) {
 }
 
 /* The largest packed particle (3D), for the reorder's saved particle. */
-#define SM_PACKED_MAX (sizeof(sm_real) * (2 * 3 + 2 * 9 + 6 + 3) + sizeof(uint16_t) + 64)
+#define SM_PACKED_MAX (sizeof(double) * (2 * 3 + 2 * 9 + 6 + 3) + sizeof(uint16_t) + sizeof(uint32_t) + 64)
 
 static inline __attribute__((always_inline)) void permute_d(sm_particles *p, int d, uint32_t *perm) {
     const size_t n = p->n;

@@ -37,7 +37,8 @@
     X(vol0, sm_real, 1, SM_REST_ZERO, 0, "m^3 (m^2 in 2D): initial volume V0")                       \
     X(q, sm_real, 1, SM_REST_ZERO, 1, "1: hardening state (3.78)")                                   \
     X(alpha, sm_real, 1, SM_REST_ZERO, 1, "1: Drucker-Prager alpha (3.80)")                          \
-    X(mat, uint16_t, 1, SM_REST_ZERO, 0, "material id")
+    X(mat, uint16_t, 1, SM_REST_ZERO, 0, "material id")                                              \
+    X(id, uint32_t, 1, SM_REST_ZERO, 0, "stable particle id: 0, 1, 2, ... in order of insertion")
 
 typedef struct sm_particles {
     size_t n, cap; /* particles stored, particles allocated */
@@ -56,7 +57,7 @@ enum {
 /* Runtime description of one field (checkpoints write and read every field from this table). */
 typedef struct sm_particle_field {
     const char *name;  /* as in the list: "x", "v", ... */
-    const char *ctype; /* "sm_real" (float or double by build: see elem_size) or "uint16_t" */
+    const char *ctype; /* "sm_real" (float or double by build: see elem_size), "uint16_t", "uint32_t" */
     const char *doc;   /* "unit: meaning" */
     size_t elem_size;  /* bytes of one value */
     int count;         /* values per particle */

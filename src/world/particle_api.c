@@ -51,6 +51,7 @@ sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions,
         P->vol0[p] = (sm_real)vol0;
         P->alpha[p] = m->alpha0;
         P->mat[p] = (uint16_t)material;
+        P->id[p] = (uint32_t)w->next_id++;
     }
     P->n = first + n;
     w->dirty = 1;
@@ -64,6 +65,7 @@ double sm_world_particle_mass(const sm_world *w, size_t i) {
 
 void sm_world_particles(const sm_world *w, sm_particles_view *o) {
     o->n = w->p.n;
+    o->id = w->p.id;
     o->dim = w->dim;
     o->x = w->p.x;
     o->v = w->p.v;

@@ -70,6 +70,7 @@ struct sm_world {
     int step_bad;           /* the last step produced a non-finite particle value */
     int dirty;              /* particles changed outside a step since the last G2P: scan them */
     int failed;             /* a numerical failure stopped the world */
+    uint64_t next_id;       /* the id the next added particle gets (particles.h's field id) */
 
     char err[512];
 };

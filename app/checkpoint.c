@@ -1,0 +1,232 @@
+/* Checkpoint files: see checkpoint.h. */
+#define _POSIX_C_SOURCE 200809L
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include "app/checkpoint.h"
+#include "app/io/files.h"
+
+#define TRAILER_BYTES (4 + 8 + 8 + 4 + 4)
+
+typedef struct membuf {
+    unsigned char *data;
+    size_t len, cap;
+} membuf;
+
+static int mem_write(void *user, const void *p, size_t n) {
+    membuf *b = user;
+    if (b->len + n > b->cap) {
+        size_t cap = (b->len + n) * 2;
+        unsigned char *q = realloc(b->data, cap);
+        if (!q) return 1;
+        b->data = q;
+        b->cap = cap;
+    }
+    memcpy(b->data + b->len, p, n);
+    b->len += n;
+    return 0;
+}
+
+static int write_all(int fd, const unsigned char *p, size_t n) {
+    while (n > 0) {
+        ssize_t k = write(fd, p, n);
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) return -1;
+        p += k;
+        n -= (size_t)k;
+    }
+    return 0;
+}
+
+/* tmp, fsync, rename, fsync of the folder. */
+static sm_status write_durably(const char *dir, const char *path, const membuf *b, char *err, size_t errlen) {
+    char tmp[SM_PATH_MAX];
+    if (sm_temp_name(tmp, sizeof tmp, path, (long)getpid()) != 0) {
+        snprintf(err, errlen, "%s: name too long", path);
+        return SM_ERR_IO;
+    }
+    int slot = sm_track_temporary(tmp);
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    int ok = fd >= 0 && write_all(fd, b->data, b->len) == 0 && fsync(fd) == 0;
+    int e = errno;
+    if (fd >= 0 && close(fd) != 0 && ok) {
+        ok = 0;
+        e = errno;
+    }
+    if (ok && rename(tmp, path) != 0) {
+        ok = 0;
+        e = errno;
+    }
+    if (!ok) unlink(tmp);
+    if (slot >= 0) sm_untrack_temporary(slot);
+    if (!ok) {
+        snprintf(err, errlen, "%s: %s", path, strerror(e));
+        return SM_ERR_IO;
+    }
+    int dfd = open(dir, O_RDONLY);
+    if (dfd >= 0) {
+        fsync(dfd);
+        close(dfd);
+    }
+    return SM_OK;
+}
+
+/* Removes checkpoints older than the newest `keep` (names sort by frame: zero-padded). */
+static void prune(const char *dir, int keep) {
+    DIR *d = opendir(dir);
+    if (!d) return;
+    int frames[4096], n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) && n < 4096) {
+        int f;
+        char tail[8];
+        if (sscanf(e->d_name, "ckpt_%d.sm%7s", &f, tail) == 2 && !strcmp(tail, "c")) frames[n++] = f;
+    }
+    closedir(d);
+    for (int i = 0; i < n; i++) {
+        int newer = 0;
+        for (int j = 0; j < n; j++) newer += frames[j] > frames[i];
+        if (newer >= keep) {
+            char p[SM_PATH_MAX];
+            if (snprintf(p, sizeof p, "%s/ckpt_%08d.smc", dir, frames[i]) < (int)sizeof p) unlink(p);
+        }
+    }
+}
+
+static void put_le(membuf *b, uint64_t v, int bytes) {
+    unsigned char t[8];
+    for (int i = 0; i < bytes; i++) t[i] = (unsigned char)(v >> (8 * i));
+    mem_write(b, t, (size_t)bytes);
+}
+
+static uint64_t get_le(const unsigned char *p, int bytes) {
+    uint64_t v = 0;
+    for (int i = 0; i < bytes; i++) v |= (uint64_t)p[i] << (8 * i);
+    return v;
+}
+
+sm_status sm_checkpoint_write(const char *out_dir, const sm_world *w, int frame, uint64_t scene_hash, int keep, char *path,
+                              size_t pathlen, char *err, size_t errlen) {
+    char dir[SM_PATH_MAX];
+    if (snprintf(dir, sizeof dir, "%s/checkpoints", out_dir) >= (int)sizeof dir - SM_NAME_RESERVE) {
+        snprintf(err, errlen, "%s: name too long for its checkpoints", out_dir);
+        return SM_ERR_IO;
+    }
+    sm_status st = sm_make_dirs(dir, err, errlen);
+    if (st != SM_OK) return st;
+    membuf b = {0};
+    if (sm_world_save(w, mem_write, &b) != SM_OK) {
+        free(b.data);
+        snprintf(err, errlen, "checkpoint of frame %d: out of memory", frame);
+        return SM_ERR_NOMEM;
+    }
+    const size_t stream = b.len;
+    put_le(&b, (uint64_t)frame, 4);
+    put_le(&b, scene_hash, 8);
+    put_le(&b, stream, 8);
+    mem_write(&b, "SMCK", 4);
+    put_le(&b, crc32(0L, b.data, (uInt)b.len), 4);
+    if (snprintf(path, pathlen, "%s/ckpt_%08d.smc", dir, frame) >= (int)pathlen) st = SM_ERR_IO;
+    st = st != SM_OK ? st : b.len == stream + TRAILER_BYTES ? write_durably(dir, path, &b, err, errlen) : SM_ERR_NOMEM;
+    free(b.data);
+    if (st == SM_OK) prune(dir, keep);
+    return st;
+}
+
+sm_status sm_checkpoint_read(const char *path, unsigned char **stream, size_t *len, int *frame, uint64_t *scene_hash,
+                             char *err, size_t errlen) {
+    *stream = NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        snprintf(err, errlen, "%s: %s", path, strerror(errno));
+        return SM_ERR_IO;
+    }
+    membuf b = {0};
+    unsigned char chunk[65536];
+    size_t k;
+    while ((k = fread(chunk, 1, sizeof chunk, f)) > 0)
+        if (mem_write(&b, chunk, k)) break;
+    fclose(f);
+    const char *why = NULL;
+    if (b.len < TRAILER_BYTES) why = "too short to be a checkpoint (truncated?)";
+    else if (memcmp(b.data + b.len - 8, "SMCK", 4) != 0) why = "no checkpoint trailer (truncated?)";
+    else if (get_le(b.data + b.len - 4, 4) != crc32(0L, b.data, (uInt)(b.len - 4))) why = "checksum mismatch (corrupt)";
+    else if (get_le(b.data + b.len - 16, 8) != b.len - TRAILER_BYTES) why = "stream length mismatch";
+    if (why) {
+        snprintf(err, errlen, "%s: %s", path, why);
+        free(b.data);
+        return SM_ERR_INVALID;
+    }
+    const unsigned char *t = b.data + b.len - TRAILER_BYTES;
+    *frame = (int)get_le(t, 4);
+    *scene_hash = get_le(t + 4, 8);
+    *len = b.len - TRAILER_BYTES;
+    *stream = b.data;
+    return SM_OK;
+}
+
+/* The sink keeps the last frame's state in memory (one sm_world_save per frame: a copy of the
+ * particle arrays), so that a numerical failure in the next frame can still write it. */
+typedef struct ckpt_state {
+    membuf last;      /* the stream of frame last_frame */
+    int last_frame;   /* -1: none */
+    const char *out;  /* the output folder */
+    const sm_world *w;
+} ckpt_state;
+
+static sm_status ckpt_begin(sm_sink *s, const sm_run_info *run, char *err, size_t errlen) {
+    ckpt_state *c = calloc(1, sizeof *c);
+    if (!c) {
+        snprintf(err, errlen, "out of memory");
+        return SM_ERR_NOMEM;
+    }
+    c->last_frame = -1;
+    c->out = run->out_dir;
+    c->w = run->w;
+    s->state = c;
+    return SM_OK;
+}
+
+static sm_status ckpt_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t errlen) {
+    const sm_checkpoint_config *c = s->config;
+    ckpt_state *cs = s->state;
+    cs->last.len = 0;
+    cs->last_frame = sm_world_save(fr->w, mem_write, &cs->last) == SM_OK ? fr->frame : -1;
+    if (c->every <= 0 || fr->frame == 0 || fr->frame % c->every != 0) return SM_OK;
+    char path[SM_PATH_MAX];
+    return sm_checkpoint_write(fr->out_dir, fr->w, fr->frame, c->scene_hash, c->keep, path, sizeof path, err, errlen);
+}
+
+/* After a numerical failure: the last good frame's state written as its checkpoint. */
+static sm_status ckpt_end(sm_sink *s, sm_status run_status, char *err, size_t errlen) {
+    const sm_checkpoint_config *c = s->config;
+    ckpt_state *cs = s->state;
+    sm_status st = SM_OK;
+    if (run_status == SM_ERR_NUMERICAL && cs->last_frame >= 0) {
+        sm_world *good;
+        char e2[256], path[SM_PATH_MAX];
+        st = sm_world_load(cs->last.data, cs->last.len, &good, e2, sizeof e2);
+        if (st == SM_OK) {
+            st = sm_checkpoint_write(cs->out, good, cs->last_frame, c->scene_hash, c->keep, path, sizeof path, err, errlen);
+            sm_world_destroy(good);
+        } else {
+            snprintf(err, errlen, "the last good state: %s", e2);
+        }
+    }
+    free(cs->last.data);
+    free(cs);
+    s->state = NULL;
+    return st;
+}
+
+sm_sink sm_sink_checkpoint(const sm_checkpoint_config *config) {
+    sm_sink s = {"checkpoint", config, NULL, ckpt_begin, ckpt_frame, ckpt_end};
+    return s;
+}

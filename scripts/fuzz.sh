@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the libFuzzer harnesses (docs/robustness.md). Needs clang 14.
-#   scripts/fuzz.sh READER [SECONDS]   build build-fuzz, fuzz READER (scene, ply) for SECONDS (default
+#   scripts/fuzz.sh READER [SECONDS]   build build-fuzz, fuzz READER (scene, ply, checkpoint) for SECONDS (default
 #                                      900) with the committed corpus as seeds, new inputs in
 #                                      build-fuzz/work/READER, crashes in build-fuzz/crash/READER/
 #   scripts/fuzz.sh merge READER       add the inputs of build-fuzz/work/READER that reach new
@@ -22,8 +22,10 @@ r=${1:?usage: scripts/fuzz.sh READER [SECONDS] | merge READER}
 secs=${2:-900}
 cmake --build $B -j2 --target fuzz_$r >/dev/null
 mkdir -p $B/work/$r $B/crash/$r
+maxlen=4096
+[ "$r" = checkpoint ] && maxlen=32768 # whole checkpoints of the small seed worlds (9-20 KB)
 dict=()
 [ -f tests/fuzz/$r.dict ] && dict=(-dict=tests/fuzz/$r.dict)
 ASAN_OPTIONS=detect_leaks=1 nice -n 19 $B/tests/fuzz/fuzz_$r "${dict[@]}" -max_total_time="$secs" \
-    -rss_limit_mb=2048 -timeout=5 -max_len=4096 -print_final_stats=1 -artifact_prefix=$B/crash/$r/ \
+    -rss_limit_mb=2048 -timeout=5 -max_len=$maxlen -print_final_stats=1 -artifact_prefix=$B/crash/$r/ \
     $B/work/$r tests/fuzz/corpus/$r

@@ -75,6 +75,46 @@ int main(void) {
         m.h3 = 40; /* h0 > h3 required */
         CHECK(sm_world_add_material(w, &m, NULL) == SM_ERR_INVALID);
         CHECK_MSG(sm_world_errmsg(w), "h0 > h3");
+        /* phi_F of (3.79) must stay in [0, 90) over q >= 0 (issue 12): the check names the peak
+         * q* = 1/h2 + h3/h1, phi* = h0 + (h1/h2) exp(-(1 + h2 h3/h1)); a scan of phi_F agrees. */
+        {
+            static const double sets[][5] = {
+                /* h0, h1, h2, h3, accepted */
+                {35, 9, 0.2, 10, 1},   /* thesis: peak 48.3 degrees at q = 6.11 */
+                {35, 30, 0.2, 10, 1},  /* peak 86.6 */
+                {35, 32, 0.2, 10, 0},  /* peak 90.3 */
+                {35, 9, 0.01, 10, 0},  /* peak 362 at q = 101 */
+                {35, 9, 0, 10, 0},     /* h2 = 0, h1 > 0: unbounded (205 degrees at q = 20) */
+                {35, 0, 0, 10, 1},     /* h1 = 0: constant 25 */
+                {89, 0, 0.5, 10, 1},   /* h1 = 0: rises to 89 */
+            };
+            for (size_t k = 0; k < sizeof sets / sizeof sets[0]; k++) {
+                m = sm_material_def_sand();
+                m.h0 = sets[k][0], m.h1 = sets[k][1], m.h2 = sets[k][2], m.h3 = sets[k][3];
+                double worst = -1e300, least = 1e300;
+                for (int i = 0; i <= 400000; i++) {
+                    const double phi = sm_hardening_friction_angle(&m, i * 1e-3);
+                    worst = fmax(worst, phi), least = fmin(least, phi);
+                }
+                char merr[256] = "";
+                const int ok = sm_material_def_check(&m, merr, sizeof merr) == SM_OK;
+                CHECK(ok == (sets[k][4] != 0));
+                CHECK(ok == (worst < 90 && least >= 0));
+                if (!ok) CHECK_MSG(merr, "hardening: ");
+            }
+            m = sm_material_def_sand();
+            m.h2 = 0.01;
+            CHECK(sm_world_add_material(w, &m, NULL) == SM_ERR_INVALID);
+            CHECK_MSG(sm_world_errmsg(w), "peaks at 362.4 degrees at q = 101.1");
+            m.h2 = 0;
+            CHECK(sm_world_add_material(w, &m, NULL) == SM_ERR_INVALID);
+            CHECK_MSG(sm_world_errmsg(w), "grows without bound (90 degrees at q = 7.222)");
+            m = sm_material_def_sand();
+            m.h0 = 90;
+            m.h3 = 0;
+            CHECK(sm_world_add_material(w, &m, NULL) == SM_ERR_INVALID);
+            CHECK_MSG(sm_world_errmsg(w), "h0: must be < 90 degrees");
+        }
         m = sm_material_def_sand();
         m.hardening = 0;
         m.friction_angle = 95;

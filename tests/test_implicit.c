@@ -332,13 +332,14 @@ static void test_near_repeated(int d) {
                 s[1] *= 1 + deltas[k];
                 sm_real F[9], Y[9];
                 compose(d, s, F);
-                /* float: a 2-D pair equal to rounding is hydrostatic -> case 2 */
+                /* float: a 2-D pair equal to rounding is hydrostatic (case 1 under compression,
+                 * case 2 in tension), which need not be the tiny deviator's case */
                 int c = sm_implicit_Y(d, F, &mat, Y);
                 if (SM_DOUBLE || d == 3) CHECK(c == cas);
                 record(c, FAM_NEAR, check_point(d, F, &mat, -1));
             }
     }
-    /* triple (3-D) near-repeated, elastic only (plastic: hydrostatic -> tip, or tiny deviator) */
+    /* triple (3-D) near-repeated, elastic only (plastic: hydrostatic, or a tiny deviator) */
     if (d == 3) {
         sm_implicit_material mat = material(0, g_alpha);
         for (int n = 0; n < 40; n++) {
@@ -377,9 +378,9 @@ static void apply_uv(int d, const double *U, const double *V, const sm_implicit_
 static void test_exact_repeated(int d) {
     int exact_svd = 0, tries_svd = 0;
     for (int cas = 0; cas <= 3; cas++) {
-        if (d == 2 && cas >= 1) { /* 2-D: repeated => hydrostatic => tip (case 2) */
-            if (cas != 2) continue;
-        }
+        /* 2-D: repeated => hydrostatic: tip in tension (case 2), inside the cone under compression
+         * (case 1, not the tip: issue 12); never case 3 */
+        if (d == 2 && cas == 3) continue;
         sm_implicit_material mat = material(cas != 0, g_alpha);
         for (int n = 0; n < 60; n++) {
             double eps[3], dir[3];
@@ -388,7 +389,7 @@ static void test_exact_repeated(int d) {
                 dir[0] = sg / sqrt(6.0), dir[1] = sg / sqrt(6.0), dir[2] = -2 * sg / sqrt(6.0);
                 gen_eps(d, cas, (n & 2) ? 0.4 : 0.05, g_alpha, dir, eps);
             } else {
-                eps[0] = eps[1] = U_(-0.3, 0.3);
+                eps[0] = eps[1] = cas == 2 ? U_(0.01, 0.3) : cas == 1 ? -U_(0.01, 0.3) : U_(-0.3, 0.3);
             }
             sm_real sr[3];
             for (int i = 0; i < d; i++) sr[i] = (sm_real)exp(eps[i]);

@@ -380,14 +380,13 @@ static void test_project(int d) {
             for (int i = 0; i < d; i++) CHECK(out[i] == 1);
             CHECK_NEAR(dq, t.neps, 8 * u * t.neps);
 
-            /* case II, pure hydrostatic compression (zero deviator): tip, dq = ||eps|| */
+            /* pure hydrostatic compression (zero deviator): on the cone's axis, inside: case I,
+             * unchanged (not the tip: issue 12) */
             sm_real h = (sm_real)U_(0.3, 0.999);
             for (int i = 0; i < d; i++) s[i] = h;
             c = sm_dp_project(d, s, alpha, mu, la, out, &dq);
-            CHECK(c == 2);
-            for (int i = 0; i < d; i++) CHECK(out[i] == 1);
-            double dq_ref = sqrt((double)d) * fabs(log((double)h));
-            CHECK_NEAR(dq, dq_ref, 8 * u * dq_ref);
+            CHECK(c == 1 && dq == 0);
+            for (int i = 0; i < d; i++) CHECK(out[i] == h);
 
             /* case III: compressed, deviator outside the cone */
             m = U_(-0.3, -1e-3);
@@ -453,23 +452,43 @@ static void test_project(int d) {
         CHECK_REL(dq, t.ndev, 16 * u, 0);
     }
 
-    /* the rest state: tip, nothing to harden */
+    /* the rest state: inside (on the apex, tr = 0), unchanged, nothing to harden */
     {
         sm_real one[3] = {1, 1, 1}, out[3], dq = -1;
         int c = sm_dp_project(d, one, (sm_real)sm_dp_alpha(0.5), mu, la, out, &dq);
-        CHECK(c == 2 && dq == 0);
+        CHECK(c == 1 && dq == 0);
         for (int i = 0; i < d; i++) CHECK(out[i] == 1);
     }
 
-    /* the zero-deviator test is tiny: a hydrostatic state perturbed by 64 ulps is no longer
-     * "zero deviator" and stays inside the cone (case I) */
+    /* No jump on the hydrostatic axis (issue 12: Sigma = 0.99 I went to the tip, dq = 0.0174,
+     * while 0.99 I plus a 1e-9 deviator stayed). Under compression the exactly hydrostatic state,
+     * one perturbed by 64 ulps and one by a 1e-4 deviator all stay where they are (case I, dq = 0),
+     * for alpha > 0 (for alpha = 0 the exactly hydrostatic one); in tension (1.001 I) the tip takes over with dq = ||eps||, which
+     * goes to 0 as the state approaches the apex (no jump there either). */
     {
-        sm_real s[3], out[3], dq = -1;
-        for (int i = 0; i < d; i++) s[i] = (sm_real)0.8;
-        s[d - 1] = (sm_real)(0.8 * (1 + 64 * u));
-        int c = sm_dp_project(d, s, (sm_real)sm_dp_alpha(0.5), mu, la, out, &dq);
-        CHECK(c == 1 && dq == 0);
-        for (int i = 0; i < d; i++) CHECK(out[i] == s[i]);
+        const double alphas[3] = {0, sm_dp_alpha(0.2), sm_dp_alpha(0.6)};
+        const double perturb[3] = {0, 64 * u, 1e-4};
+        for (int ia = 0; ia < 3; ia++)
+            for (int ip = 0; ip < 3; ip++) {
+                if (ia == 0 && ip > 0) continue; /* alpha = 0: the cone is the axis, any deviator is case III */
+                sm_real s[3], out[3], dq = -1;
+                for (int i = 0; i < d; i++) s[i] = (sm_real)0.99;
+                s[d - 1] = (sm_real)(0.99 * (1 + perturb[ip]));
+                int c = sm_dp_project(d, s, (sm_real)alphas[ia], mu, la, out, &dq);
+                CHECK(c == 1 && dq == 0);
+                for (int i = 0; i < d; i++) CHECK(out[i] == s[i]);
+            }
+        const double stretch[2] = {1e-3, 1e-6};
+        for (int k = 0; k < 2; k++) {
+            sm_real s[3], out[3], dq = -1;
+            for (int i = 0; i < d; i++) s[i] = (sm_real)(1 + stretch[k]);
+            int c = sm_dp_project(d, s, (sm_real)sm_dp_alpha(0.5), mu, la, out, &dq);
+            CHECK(c == 2);
+            for (int i = 0; i < d; i++) CHECK(out[i] == 1);
+            double dq_ref = sqrt((double)d) * log((double)s[0]);
+            CHECK_NEAR(dq, dq_ref, 8 * u * dq_ref + 1e-30);
+            CHECK(dq <= 2 * sqrt((double)d) * stretch[k]);
+        }
     }
 }
 

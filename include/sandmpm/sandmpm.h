@@ -240,7 +240,9 @@ typedef struct sm_material_def {
     double poisson_ratio;    /**< nu, in (-1, 0.5) */
     int hardening;           /**< sand: 1 = hardening with h0..h3 (3.78-3.80); 0 = fixed friction_angle */
     double friction_angle;   /**< sand without hardening: phi_F in degrees, [0, 90) */
-    double h0, h1, h2, h3;   /**< hardening: phi_F = h0 + (h1 q - h3) exp(-h2 q); h0,h1,h3 degrees, h2 dimensionless */
+    double h0, h1, h2, h3;   /**< hardening: phi_F = h0 + (h1 q - h3) exp(-h2 q); h0,h1,h3 degrees, h2 dimensionless.
+                                  All >= 0, h0 > h3, h0 < 90, and phi_F < 90 for every q >= 0: with h1 > 0 the peak
+                                  h0 + (h1/h2) exp(-(1 + h2 h3/h1)) at q = 1/h2 + h3/h1 must be < 90 (so h2 > 0). */
     sm_cone_fit cone_fit;    /**< sand: how alpha follows from phi_F (fixed or hardening). Default (0)
                                   SM_CONE_TRIAXIAL_COMPRESSION, the thesis. */
 } sm_material_def;
@@ -475,14 +477,21 @@ typedef enum sm_stage {
 /** Name of a stage ("p2g", ...). */
 SM_API const char *sm_stage_name(sm_stage s);
 
-/** The next time step the world would take, capped so it does not pass t_end (s). */
+/** The next time step the world would take, capped so it does not pass t_end (s). After a step
+ *  that sm_world_step refused by the CFL check, at most half the refused dt (until a step is taken). */
 SM_API double sm_world_next_dt(sm_world *w, double t_end);
 
 /** One step of size dt (> 0, s). Returns SM_ERR_NUMERICAL with a message naming the step and
- *  particle if the state becomes NaN/Inf; the state is then the last good one. */
+ *  particle if the state becomes NaN/Inf; the state is then the last good one and the world has
+ *  stopped (every later step fails). A dt in which a particle would move more than one cell (the
+ *  CFL bound, with a relative slack of 1e-5 on the squared speed so that sm_world_next_dt's own
+ *  choice at cfl = 1 passes) is refused before anything moves: SM_ERR_NUMERICAL with a message
+ *  naming the particle, the world unchanged and still usable; retry with a smaller dt (or with
+ *  sm_world_next_dt, which then returns at most half the refused dt). */
 SM_API sm_status sm_world_step(sm_world *w, double dt);
 
-/** Adaptive steps until the world's time equals t_end exactly. */
+/** Adaptive steps until the world's time equals t_end exactly. A step refused by the CFL check
+ *  (see sm_world_step) is retried with half the dt, up to 60 times in a row. */
 SM_API sm_status sm_world_advance(sm_world *w, double t_end);
 
 /** Simulated time, s. */

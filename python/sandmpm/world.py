@@ -367,6 +367,7 @@ class World:
             return
         if not math.isfinite(t_end):
             self._check(lib.sm_world_advance(w, t_end))  # the library's message
+        retries = 0
         while lib.sm_world_time(w) < t_end:
             dt = lib.sm_world_next_dt(w, t_end)
             self._views.retire()
@@ -377,6 +378,10 @@ class World:
             self._views.retire()
             if self._motions:
                 self._raise_motion_error()
+            if st != lib.SM_OK and retries < 60 and lib.sm_world_next_dt(w, t_end) < dt:
+                retries += 1  # refused by the CFL check, world intact: retry with half the dt, as sm_world_advance
+                continue
+            retries = 0
             self._check(st)
             if callback is not None:
                 callback(self)

@@ -159,6 +159,24 @@ void sm_world_init_stress(sm_world *w, size_t first) { plasticity(w, first); }
 
 /* ---- The step --------------------------------------------------------------------------- */
 
+/* Before anything moves: finite state and the CFL bound. A CFL violation alone leaves the world
+ * usable (w->cfl_rejected; the caller may retry with a smaller dt); non-finite state stops it. */
+static sm_status check_start(sm_world *w, double dt) {
+    const double t = sm_seconds();
+    int too_fast = 0;
+    const sm_status st = sm_health_check_start(w, dt, &too_fast);
+    w->stage_seconds[SM_STAGE_CHECKS] += sm_seconds() - t;
+    if (st != SM_OK) {
+        if (too_fast) {
+            w->cfl_rejected = 1;
+            w->dt_cap = 0.5 * dt;
+        } else {
+            w->failed = 1;
+        }
+    }
+    return st;
+}
+
 /* Runs a stage that can fail, times it into stage_seconds[stage]; a failure stops the world
  * (the stage has written the message). */
 #define STAGE(w, t, stage, call)          \
@@ -171,10 +189,10 @@ void sm_world_init_stress(sm_world *w, size_t first) { plasticity(w, first); }
         }                                 \
     } while (0)
 
-/* The particle stages of Algorithm 1 (what a step does when there are particles). */
+/* The particle stages of Algorithm 1 (what a step does when there are particles), after the
+ * pre-step check. */
 static sm_status step_particles(sm_world *w, const sm_step_ctx *c) {
     double t = sm_seconds();
-    STAGE(w, &t, SM_STAGE_CHECKS, sm_health_check_start(w, c->dt));
     STAGE(w, &t, SM_STAGE_SORT, bin_particles(w, c));     /* 2 */
     p2g(w, c);                                            /* 3 */
     lap(w, SM_STAGE_P2G, &t);
@@ -208,7 +226,12 @@ sm_status sm_world_step(sm_world *w, double dt) {
     if (w->failed)
         return sm_world_fail(w, SM_ERR_NUMERICAL, "the world stopped after a numerical failure at step %llu; create a new one",
                              (unsigned long long)w->steps);
+    w->cfl_rejected = 0;
     if (!(dt > 0) || !isfinite(dt)) return sm_world_fail(w, SM_ERR_INVALID, "step: dt must be > 0, got %g", dt);
+    if (w->p.n > 0) {
+        const sm_status st = check_start(w, dt);
+        if (st != SM_OK) return st;
+    }
     const sm_step_ctx c = step_ctx(w, dt);
     colliders_begin_step(w, dt);                      /* poses at t^n and t^n+1 */
     if (w->p.n > 0) {
@@ -221,6 +244,7 @@ sm_status sm_world_step(sm_world *w, double dt) {
         if (st != SM_OK) return st;
     }
     advance_clock(w, dt);
+    w->dt_cap = INFINITY;
     return SM_OK;
 }
 
@@ -253,6 +277,7 @@ double sm_world_next_dt(sm_world *w, double t_end) {
         for (int i = 0; i < w->nmats; i++) c = fmax(c, w->mats[i].wave_speed);
         if (c > 0) dt = fmin(dt, w->def.elastic_cfl * w->def.dx / c);
     }
+    dt = fmin(dt, w->dt_cap); /* after a step refused by the CFL check */
     double remaining = t_end - w->time;
     if (remaining > 0) {
         if (dt >= remaining * (1 - 1e-12)) dt = remaining;
@@ -262,13 +287,38 @@ double sm_world_next_dt(sm_world *w, double t_end) {
     return dt;
 }
 
+/* A step that the CFL check refused is retried with half the dt (w->dt_cap, which
+ * sm_world_next_dt respects), up to this many times in a row (2^-60: a speed beyond any the
+ * controller could have missed by rounding). */
+#define SM_CFL_RETRIES 60
+
+/* A time step below this fraction of max_dt means the speeds ran away (an unstable run: the
+ * controller follows them down to dt = 0 and the run never ends): a numerical failure. */
+#define SM_RUNAWAY_DT_FRACTION 1e-9
+
+static sm_status runaway(sm_world *w, double dt) {
+    w->failed = 1;
+    return sm_world_fail(w, SM_ERR_NUMERICAL,
+                         "step %llu at t = %.9g s: runaway speeds: the fastest particle moves at %.3g m/s, so the "
+                         "CFL time step is %.3g s (below %g of max_dt): the run is unstable (lower E, elastic_cfl "
+                         "or max_dt, or use the implicit integrator)",
+                         (unsigned long long)w->steps, w->time, max_particle_speed(w), dt, SM_RUNAWAY_DT_FRACTION);
+}
+
 sm_status sm_world_advance(sm_world *w, double t_end) {
     if (!isfinite(t_end)) return sm_world_fail(w, SM_ERR_INVALID, "advance: end time must be finite");
+    int retries = 0;
     while (w->time < t_end) {
         const double dt = sm_world_next_dt(w, t_end);
         const int last = (dt == t_end - w->time);
+        if (!last && !(dt >= SM_RUNAWAY_DT_FRACTION * w->def.max_dt)) return runaway(w, dt);
         const sm_status st = sm_world_step(w, dt);
+        if (st != SM_OK && w->cfl_rejected && retries < SM_CFL_RETRIES) {
+            retries++;
+            continue;
+        }
         if (st != SM_OK) return st;
+        retries = 0;
         if (last) w->time = t_end; /* exactly, without rounding drift */
     }
     return SM_OK;

@@ -117,18 +117,21 @@ int sm_dp_project(int d, const sm_real *sigma, sm_real alpha, sm_real mu, sm_rea
         emax = SM_MAX(emax, sm_fabs(eps[i]));
         devmax = SM_MAX(devmax, sm_fabs(dev[i]));
     }
-    /* "dev eps = 0": computing dev from d logarithms rounds to a few ulps of max|eps_i| even for an
-     * exactly hydrostatic Sigma, so a deviator at or below 2 d SM_EPS max|eps_i| is zero. */
-    int zero_dev = devmax <= SM_R(2.0) * (sm_real)d * SM_EPS * emax;
-    if (zero_dev || tr > 0) { /* case II: tip of the cone */
+    if (tr > 0) { /* case II: tension, tip of the cone */
         *dq = norm_d(d, eps);
         for (int i = 0; i < d; i++) out[i] = 1;
         return 2;
     }
+    /* "dev eps = 0": computing dev from d logarithms rounds to a few ulps of max|eps_i| even for an
+     * exactly hydrostatic Sigma, so a deviator at or below 2 d SM_EPS max|eps_i| is zero. Under
+     * compression (tr <= 0) that is a point on the cone's axis, inside it (case I): Algorithm 2's
+     * "dev eps = 0 -> tip" would send Sigma = 0.99 I to Sigma = 1 while 0.99 I plus any measurable
+     * deviator stays put (issue 12). */
+    int zero_dev = devmax <= SM_R(2.0) * (sm_real)d * SM_EPS * emax;
     sm_real ndev = norm_d(d, dev);
     sm_real kappa = ((sm_real)d * lambda + 2 * mu) / (2 * mu) * tr * alpha; /* <= 0 for alpha >= 0 */
     sm_real dgamma = ndev + kappa;
-    if (dgamma <= 0) { /* case I: inside the cone; the input is kept as it is (even inverted) */
+    if (zero_dev || dgamma <= 0) { /* case I: inside the cone; the input is kept as it is (even inverted) */
         *dq = 0;
         for (int i = 0; i < d; i++) out[i] = sigma[i];
         return 1;

@@ -42,10 +42,11 @@ sm_real sm_dp_yield(int d, const sm_real *sigma, sm_real alpha, sm_real mu, sm_r
 
 /* PROJECT(Sigma, alpha) of Algorithm 2. Writes the projected singular values to out (may alias
  * sigma) and the hardening increment to *dq. Returns the case: 1 (inside, unchanged),
- * 2 (tension or zero deviator: tip of the cone, out = 1), 3 (projected onto the cone).
- * "Zero deviator" means max|dev eps_i| <= 2 d SM_EPS max|eps_i|, the rounding level of computing
- * dev eps; so, as in Algorithm 2, an exactly hydrostatic compression goes to the tip (out = 1,
- * dq = ||eps||), while anything measurably off the hydrostatic axis is case 1 or 3. */
+ * 2 (tension, tr eps > 0: tip of the cone, out = 1, dq = ||eps||), 3 (projected onto the cone).
+ * A zero deviator (max|dev eps_i| <= 2 d SM_EPS max|eps_i|, the rounding level of computing
+ * dev eps) under compression (tr eps <= 0) lies on the cone's axis: case 1. Algorithm 2 sends it
+ * to the tip; that made the map jump there (0.99 I -> I, while 0.99 I plus a 1e-9 deviator stays),
+ * issue 12. Only tension goes to the tip. */
 int sm_dp_project(int d, const sm_real *sigma, sm_real alpha, sm_real mu, sm_real lambda,
                   sm_real *out, sm_real *dq);
 

@@ -453,11 +453,11 @@ INL int lane_project(int d, const sm_real *s, sm_real *alpha, sm_real *q, sm_rea
         nd += dev[i] * dev[i];
     }
     int zero_dev = devmax <= SM_R(2.0) * (sm_real)d * SM_EPS * emax;
-    int case2 = zero_dev | (tr > 0); /* bitwise: no short-circuit jumps */
+    int case2 = tr > 0; /* tension alone goes to the tip; a zero deviator under compression is case 1 */
     sm_real ndev = sm_sqrt(nd);
     sm_real kappa = ((sm_real)d * lambda + 2 * mu) / (2 * mu) * tr * *alpha;
     sm_real dgamma = ndev + kappa;
-    int case1 = (plastic == 0) | ((case2 == 0) & (dgamma <= 0));
+    int case1 = (plastic == 0) | ((case2 == 0) & ((dgamma <= 0) | zero_dev)); /* bitwise: no jumps */
     case2 = case2 & (case1 == 0);
     int case3 = (case1 == 0) & (case2 == 0);
     sm_real sc = -kappa / (ndev > 0 ? ndev : ONE);

@@ -41,6 +41,30 @@ double sm_hardening_friction_angle(const sm_material_def *m, double q) {
 
 double sm_alpha_from_friction_angle(double degrees) { return sm_dp_alpha(degrees * DEG); }
 
+/* phi_F(q) = h0 + (h1 q - h3) exp(-h2 q) (3.79, degrees; h_i >= 0, h0 > h3 checked before) must
+ * stay in [0, 90) over q >= 0, or the cone inverts (alpha < 0) or opens past the half-space.
+ * phi_F(0) = h0 - h3 > 0 is its minimum and phi_F -> h0 < 90 as q -> inf (h2 > 0). With h1 > 0
+ * it has one maximum: dphi/dq = exp(-h2 q) (h1 - h2 (h1 q - h3)) = 0 at q* = 1/h2 + h3/h1, where
+ * phi_F(q*) = h0 + (h1/h2) exp(-(1 + h2 h3/h1)). With h2 = 0 and h1 > 0, phi_F = h0 - h3 + h1 q grows
+ * without bound (35/9/0/10 reaches 205 degrees at q = 20). With h1 = 0 phi_F rises from h0 - h3
+ * towards h0. */
+static sm_status hardening_peak_check(const sm_material_def *m, char *err, size_t errlen) {
+    if (!(m->h1 > 0)) return SM_OK;
+    if (!(m->h2 > 0))
+        return sm_check_fail(err, errlen,
+                             "hardening: with h2 = 0 and h1 > 0, phi_F = h0 - h3 + h1 q grows without bound (90 degrees "
+                             "at q = %.4g); give h2 > 0 so that it peaks below 90",
+                             (90 - m->h0 + m->h3) / m->h1);
+    const double qpeak = 1 / m->h2 + m->h3 / m->h1;
+    const double peak = m->h0 + (m->h1 / m->h2) * exp(-(1 + m->h2 * m->h3 / m->h1));
+    if (!(peak < 90))
+        return sm_check_fail(err, errlen,
+                             "hardening: phi_F = h0 + (h1 q - h3) exp(-h2 q) peaks at %.4g degrees at q = %.4g "
+                             "(h0 + (h1/h2) exp(-(1 + h2 h3/h1))); must stay below 90: lower h1 or raise h2",
+                             peak, qpeak);
+    return SM_OK;
+}
+
 sm_status sm_material_def_check(const sm_material_def *m, char *err, size_t errlen) {
     if (!m) return sm_check_fail(err, errlen, "material definition is NULL");
     if (m->kind != SM_MATERIAL_SAND && m->kind != SM_MATERIAL_ELASTIC)
@@ -61,8 +85,10 @@ sm_status sm_material_def_check(const sm_material_def *m, char *err, size_t errl
                     return sm_check_fail(err, errlen, "h%d: must be finite and >= 0, got %g", i, h[i]);
             if (!(m->h0 > m->h3))
                 return sm_check_fail(err, errlen, "hardening: need h0 > h3 (thesis §3.5.3), got h0 = %g, h3 = %g", m->h0, m->h3);
-            if (!(m->h0 < 90) || !(m->h0 + m->h1 < 90 * 4))
-                return sm_check_fail(err, errlen, "h0: must be < 90 degrees, got %g", m->h0);
+            if (!(m->h0 < 90))
+                return sm_check_fail(err, errlen, "h0: must be < 90 degrees (phi_F tends to h0), got %g", m->h0);
+            const sm_status st = hardening_peak_check(m, err, errlen);
+            if (st != SM_OK) return st;
         } else if (!(m->friction_angle >= 0 && m->friction_angle < 90)) {
             return sm_check_fail(err, errlen, "friction_angle: must be in [0, 90) degrees, got %g", m->friction_angle);
         }

@@ -182,6 +182,7 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
             sm_collider_init(&w->colliders[w->nwalls++], &wc);
         }
     w->min_dt = INFINITY;
+    w->dt_cap = INFINITY;
     w->dirty = 1;
     w->max_dt = 0;
     *out = w;

@@ -1,6 +1,8 @@
 /* The frame loop; see run.h. */
 #define _POSIX_C_SOURCE 200809L
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
@@ -32,6 +34,17 @@ static sm_status advance_to(const sm_run_config *cfg, int f, char *err, size_t e
     return s;
 }
 
+/* Test hook (tests/test_checkpoints.sh): SANDMPM_TEST_NAN_AT_FRAME=N writes NaN into the first
+ * particle's velocity after frame N is written, so that the next step fails numerically. Only
+ * read from the environment; a run without it is not affected. */
+static void test_inject_nan(sm_world *w, int f) {
+    const char *at = getenv("SANDMPM_TEST_NAN_AT_FRAME");
+    sm_particles_view pv;
+    sm_world_particles(w, &pv);
+    if (!at || atoi(at) != f || pv.n == 0) return;
+    sm_world_particle_velocities(w)[0] = (sm_real)NAN;
+}
+
 static sm_status frame_loop(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm_run_result *res, char *err,
                             size_t errlen) {
     sm_run_frame fr;
@@ -60,6 +73,7 @@ static sm_status frame_loop(const sm_run_config *cfg, sm_sink *sinks, int nsinks
             }
         }
         res->frames_written = f + 1;
+        test_inject_nan(cfg->info.w, f);
     }
     return SM_OK;
 }

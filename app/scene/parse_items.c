@@ -135,8 +135,9 @@ static void warn_radians(vctx *v, const char *key, double degrees) {
     if (!(degrees > 0 && degrees <= 1.5708)) return;
     char a[32];
     size_t old = sc_push_key(v, key);
-    sc_warn(v, "%s looks like radians (%s rad = %.1f degrees); angles are in degrees", sc_fmt_num(a, degrees),
-            sc_fmt_num(a, degrees), degrees * 180 / 3.14159265358979323846);
+    const char *num = sc_fmt_num(a, degrees);
+    sc_warn(v, "%s looks like radians (%s rad = %.1f degrees); angles are in degrees", num, num,
+            degrees * 180 / 3.14159265358979323846);
     sc_pop_key(v, old);
 }
 

@@ -163,8 +163,8 @@ int main(void) {
                 case 0:
                 case 6:
                     for (int a = 0; a < 3; a++) {
-                        const sm_real *src = k == 0 ? pv.v : pv.x;
-                        float e = a < dim ? (float)src[i * dim + a] : 0.0f;
+                        const double xa = a < dim ? pv.x[i * dim + a] : 0.0;
+                        float e = a < dim ? (k == 0 ? (float)pv.v[i * dim + a] : (float)xa) : 0.0f;
                         mism += memcmp(arr + 12 * i + 4 * a, &e, 4) != 0;
                     }
                     break;

@@ -64,8 +64,12 @@ static void test_table(int d) {
     }
     CHECK(hashed == 6);
     CHECK(sum == sm_particles_packed_size(d));
-    /* x, v: d; B, F: d^2; tau: 3 or 6; vol0, q, alpha: 1; material: one uint16_t; id: one uint32_t. */
-    CHECK(sm_particles_packed_size(d) == sizeof(sm_real) * (size_t)(2 * d + 2 * d * d + (d == 3 ? 6 : 3) + 3) + 2 + 4);
+    /* x: d doubles (both builds); v: d; B, F: d^2; tau: 3 or 6; vol0, q, alpha: 1; material: one
+     * uint16_t; id: one uint32_t. */
+    CHECK(sm_particles_packed_size(d) ==
+          sizeof(double) * (size_t)d + sizeof(sm_real) * (size_t)(d + 2 * d * d + (d == 3 ? 6 : 3) + 3) + 2 + 4);
+    CHECK(sm_particle_field_info(d, SM_PFIELD_x).elem_size == sizeof(double));
+    CHECK(!strcmp(sm_particle_field_info(d, SM_PFIELD_x).ctype, "double"));
     CHECK(sm_particle_field_info(d, SM_PFIELD_F).count == d * d);
     CHECK(sm_particle_field_info(d, SM_PFIELD_tau).count == SM_NTAU(d));
     CHECK(sm_particle_field_info(d, SM_PFIELD_mat).elem_size == sizeof(uint16_t));

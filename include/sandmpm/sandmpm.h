@@ -339,7 +339,8 @@ SM_API sm_status sm_world_add_particles(sm_world *w, size_t n, const double *pos
 typedef struct sm_particles_view {
     size_t n;
     int dim;
-    const sm_real *x;     /**< positions, n*d */
+    const double *x;      /**< positions, n*d (double in both builds: slow motion is never lost to
+                               the rounding of a float position) */
     const sm_real *v;     /**< velocities, n*d */
     const sm_real *B;     /**< APIC affine momentum matrices, n*d*d, row-major */
     const sm_real *F;     /**< elastic deformation gradients F^E, n*d*d, row-major */

@@ -268,8 +268,9 @@ class World:
 
     @property
     def positions(self):
-        """Positions, (n, d), read-only view (valid until the next step)."""
-        return self._array("x", (self.dim,))
+        """Positions, (n, d), float64 in both builds (as the library stores them), read-only view
+        (valid until the next step)."""
+        return self._array("x", (self.dim,), np.dtype(np.float64))
 
     @property
     def velocities(self):

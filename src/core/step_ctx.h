@@ -10,6 +10,8 @@ typedef struct sm_step_ctx {
     double dt;            /* time step, s */
     sm_real dx, inv_dx;   /* grid spacing, m, and its inverse */
     sm_real lo[3];        /* domain_min, m: node (i, j, k) sits at lo + (i, j, k) dx */
+    double pos_lo[3];     /* the same in double, for positions (particles.h) */
+    double pos_dx, pos_inv_dx; /* dx and 1/dx in double, for positions */
     sm_real gravity[3];   /* m/s^2 */
     int cells[3];         /* cells per axis (1 along z in 2D) */
     int stencil;          /* kernel support in nodes per axis: 3 (quadratic) or 4 (cubic) */

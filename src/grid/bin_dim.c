@@ -21,9 +21,9 @@
 #include "grid/bin.h"
 #include "transfer/kernel.h"
 
-static inline uint64_t particle_key(const sm_step_ctx *c, const sm_real *xp, int S) {
+static inline uint64_t particle_key(const sm_step_ctx *c, const double *xp, int S) {
     int bb[3] = {0, 0, 0};
-    for (int a = 0; a < D; a++) bb[a] = sm_kernel_base(S, (xp[a] - c->lo[a]) * c->inv_dx) >> SM_BLOCK_BITS;
+    for (int a = 0; a < D; a++) bb[a] = sm_kernel_base(S, (xp[a] - c->pos_lo[a]) * c->pos_inv_dx) >> SM_BLOCK_BITS;
     return sm_block_key(bb[0], bb[1], bb[2]);
 }
 
@@ -57,7 +57,7 @@ static inline void thread_share(size_t n, int T, int t, size_t *p0, size_t *p1) 
 
 /* 1. counts[t * npb + block] = thread t's particles in each known block; returns the particles
  * whose block is not known. */
-static sm_status count_known_blocks(sm_bins *b, const sm_real *x, size_t n, const sm_step_ctx *c, int T,
+static sm_status count_known_blocks(sm_bins *b, const double *x, size_t n, const sm_step_ctx *c, int T,
                                     long *misses_out) {
     const size_t nb = b->npb;
     const int S = c->stencil;
@@ -88,7 +88,7 @@ static sm_status count_known_blocks(sm_bins *b, const sm_real *x, size_t n, cons
 }
 
 /* 2. Appends the blocks not known yet, in particle order (serial: deterministic). */
-static sm_status add_new_blocks(sm_bins *b, const sm_real *x, size_t n, const sm_step_ctx *c) {
+static sm_status add_new_blocks(sm_bins *b, const double *x, size_t n, const sm_step_ctx *c) {
     sm_block_hash *ph = &b->pb_hash;
     size_t nb = b->npb;
     uint64_t last = UINT64_MAX;
@@ -140,7 +140,7 @@ static size_t sort_blocks(sm_bins *b, int T) {
 }
 
 /* 3b. perm: every particle at its thread's cursor of its block. */
-static void scatter_particles(sm_bins *b, const sm_real *x, size_t n, const sm_step_ctx *c, int T) {
+static void scatter_particles(sm_bins *b, const double *x, size_t n, const sm_step_ctx *c, int T) {
     const size_t nb = b->npb;
     const int S = c->stencil;
     const sm_block_hash *ph = &b->pb_hash;

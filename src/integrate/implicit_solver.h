@@ -67,7 +67,8 @@ typedef struct sm_implicit_stats {
 typedef struct sm_implicit_sys {
     const sm_step_ctx *c;
     size_t n;                    /* particles */
-    const sm_real *x, *F, *vol0, *alpha; /* positions, F^E at t^n, initial volumes, alpha */
+    const double *x;                     /* positions (double: particles.h) */
+    const sm_real *F, *vol0, *alpha;     /* F^E at t^n, initial volumes, alpha */
     const uint16_t *mat;
     const sm_material_rt *mats;
     const sm_bins *bins;

@@ -26,8 +26,11 @@ static sm_step_ctx step_ctx(const sm_world *w, double dt) {
     c.dt = dt;
     c.dx = (sm_real)w->def.dx;
     c.inv_dx = (sm_real)w->inv_dx;
+    c.pos_dx = w->def.dx;
+    c.pos_inv_dx = w->inv_dx;
     for (int a = 0; a < 3; a++) {
         c.lo[a] = (sm_real)w->def.domain_min[a];
+        c.pos_lo[a] = w->def.domain_min[a];
         c.gravity[a] = (sm_real)w->def.gravity[a];
         c.cells[a] = w->cells[a];
     }

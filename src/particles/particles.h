@@ -9,7 +9,14 @@
  *
  * A particle's mass is its material's density times vol0: not stored (memory per particle is the
  * budget, tests/test_memory.c). Storage order is not stable: the step reorders particles by grid
- * block when that pays (sm_particles_permute). */
+ * block when that pays (sm_particles_permute).
+ *
+ * Positions are double in both builds. A step moves a particle by dt |v|, which for slow creep is
+ * far below the rounding of a float position (at x = 0.7 m, v = 5e-4 m/s, dt = 3.4e-5 s the
+ * displacement 1.7e-8 m is a quarter of a float ulp: float positions did not move at all while
+ * F^E took the full velocity gradient). In double the rounding at 1e3 m is 1.1e-13 m. The
+ * stencil's fractional offset (x - x_lo)/dx - base is formed in double and only then rounded to
+ * sm_real, so the weights are as accurate as in a double build (transfer/stencil_dim.h). */
 #ifndef SM_PARTICLES_H
 #define SM_PARTICLES_H
 
@@ -27,7 +34,7 @@
  * hashed = 1: part of sm_world_state_hash, the evolving state (tau is a function of F^E; vol0
  * and the material never change). Order = storage order of packed particles and of the hash. */
 #define SM_PARTICLE_FIELDS(X, d)                                                                     \
-    X(x, sm_real, (d), SM_REST_ZERO, 1, "m: position")                                               \
+    X(x, double, (d), SM_REST_ZERO, 1, "m: position (double in both builds: see below)")            \
     X(v, sm_real, (d), SM_REST_ZERO, 1, "m/s: velocity")                                             \
     X(B, sm_real, (d) * (d), SM_REST_ZERO, 1, "m^2/s: APIC affine matrix B_p (3.84), row-major")     \
     X(F, sm_real, (d) * (d), SM_REST_IDENTITY, 1, "1: elastic deformation gradient F^E, row-major")  \

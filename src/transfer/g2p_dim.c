@@ -44,7 +44,7 @@ static void g2p_gather(const sm_g2p_io *io, const sm_step_ctx *c, const sm_pbloc
 
 /* Per-block G2P results: positions' bounding box, largest speed, non-finite flag, clamps. */
 typedef struct g2p_acc {
-    sm_real lo[D], hi[D];
+    double lo[D], hi[D];
     sm_real vmax2;
     sm_real nan;        /* 0 * every new value, summed: NaN iff one of them is not finite */
     size_t clamped;
@@ -136,11 +136,12 @@ static inline __attribute__((always_inline)) void g2p_update(const sm_g2p_io *io
             F[a * D + e] = s;
             z += 0 * s;
         }
-    /* x = x + dt sum w v-bar (3.116); the safety clamp keeps every stencil inside the grid. */
+    /* x = x + dt sum w v-bar (3.116), in double (particles.h); the safety clamp keeps every
+     * stencil inside the grid. */
     for (int a = 0; a < D; a++) {
-        sm_real xa = io->x[p * D + a] + dt * Sum[D + a];
-        sm_real lo = c->lo[a] + SM_R(2.0) * c->dx;
-        sm_real hi = c->lo[a] + (sm_real)(c->cells[a] - 2) * c->dx;
+        double xa = io->x[p * D + a] + (double)(dt * Sum[D + a]);
+        double lo = c->pos_lo[a] + 2.0 * c->pos_dx;
+        double hi = c->pos_lo[a] + (double)(c->cells[a] - 2) * c->pos_dx;
         if (xa < lo) {
             xa = lo;
             acc->clamped++;
@@ -148,7 +149,7 @@ static inline __attribute__((always_inline)) void g2p_update(const sm_g2p_io *io
             xa = hi;
             acc->clamped++;
         }
-        z += 0 * xa;
+        z += 0 * (sm_real)xa;
         io->x[p * D + a] = xa;
         acc->lo[a] = xa < acc->lo[a] ? xa : acc->lo[a];
         acc->hi[a] = xa > acc->hi[a] ? xa : acc->hi[a];
@@ -163,8 +164,8 @@ static inline __attribute__((always_inline)) void g2p_update(const sm_g2p_io *io
 static size_t project_block(const sm_g2p_io *io, const sm_pblock *pb, const g2p_acc *acc) {
     double ctr[3] = {0, 0, 0}, R2 = 0;
     for (int a = 0; a < D; a++) {
-        ctr[a] = 0.5 * ((double)acc->lo[a] + (double)acc->hi[a]);
-        double h = 0.5 * ((double)acc->hi[a] - (double)acc->lo[a]);
+        ctr[a] = 0.5 * (acc->lo[a] + acc->hi[a]);
+        double h = 0.5 * (acc->hi[a] - acc->lo[a]);
         R2 += h * h;
     }
     const double R = sqrt(R2) + 1e-6 * (1.0 + fabs(ctr[0]) + fabs(ctr[1]) + fabs(ctr[2]));
@@ -174,10 +175,10 @@ static size_t project_block(const sm_g2p_io *io, const sm_pblock *pb, const g2p_
         for (uint32_t idx = pb->start; idx < pb->end; idx++) {
             const size_t p = io->bins->perm[idx];
             double xp[3] = {0, 0, 0}, gr[3];
-            for (int a = 0; a < D; a++) xp[a] = (double)io->x[p * D + a];
+            for (int a = 0; a < D; a++) xp[a] = io->x[p * D + a];
             double phi = sm_collider_phi(&io->colliders[b], D, 1, xp, gr);
             if (phi < 0) {
-                for (int a = 0; a < D; a++) io->x[p * D + a] = (sm_real)(xp[a] - phi * gr[a]);
+                for (int a = 0; a < D; a++) io->x[p * D + a] = xp[a] - phi * gr[a];
                 projected++;
             }
         }
@@ -223,8 +224,8 @@ void SM_FN(sm_g2p)(const sm_g2p_io *io, const sm_step_ctx *c, sm_g2p_stats *st) 
             g2p_gather(io, c, pb, cache);
             g2p_acc acc;
             for (int a = 0; a < D; a++) {
-                acc.lo[a] = (sm_real)INFINITY;
-                acc.hi[a] = -(sm_real)INFINITY;
+                acc.lo[a] = INFINITY;
+                acc.hi[a] = -INFINITY;
             }
             acc.vmax2 = acc.nan = 0;
             acc.clamped = 0;

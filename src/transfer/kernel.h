@@ -46,9 +46,17 @@ static inline __attribute__((always_inline)) int sm_kernel_1d(int S, sm_real X, 
     return b;
 }
 
-/* Stencil base node for position X in grid units. */
-static inline int sm_kernel_base(int S, sm_real X) {
-    return S == 3 ? (int)sm_floor(X - SM_R(0.5)) : (int)sm_floor(X) - 1;
+/* Stencil base node for position X in grid units (double: positions are double, particles.h). */
+static inline int sm_kernel_base(int S, double X) {
+    return S == 3 ? (int)floor(X - 0.5) : (int)floor(X) - 1;
+}
+
+/* sm_kernel_1d for a position in grid units given in double: the base and the fractional offset
+ * are formed in double, the weights from the offset rounded to sm_real. */
+static inline __attribute__((always_inline)) int sm_kernel_1d_pos(int S, double X, sm_real w[4], sm_real dw[4]) {
+    int b = sm_kernel_base(S, X);
+    sm_kernel_1d_at(S, (sm_real)(X - (double)b), w, dw);
+    return b;
 }
 
 #endif

@@ -28,15 +28,15 @@ typedef struct weights {
     sm_real dp[D][4]; /* x_i - x_p per axis, m */
 } weights;
 
-static inline __attribute__((always_inline)) void kernel_weights(int S, const sm_real *xp, const sm_step_ctx *c,
+static inline __attribute__((always_inline)) void kernel_weights(int S, const double *xp, const sm_step_ctx *c,
                                                                  const int bc[3], weights *W) {
     for (int a = 0; a < D; a++) {
-        sm_real X = (xp[a] - c->lo[a]) * c->inv_dx;
-        int b = sm_kernel_1d(S, X, W->w[a], W->dw[a]);
+        const double X = (xp[a] - c->pos_lo[a]) * c->pos_inv_dx;
+        int b = sm_kernel_1d_pos(S, X, W->w[a], W->dw[a]);
         W->lb[a] = b - (bc[a] << SM_BLOCK_BITS);
         for (int k = 0; k < 4; k++) {
             W->dw[a][k] *= c->inv_dx;
-            W->dp[a][k] = ((sm_real)(b + k) - X) * c->dx;
+            W->dp[a][k] = (sm_real)(((double)(b + k) - X) * c->pos_dx);
         }
     }
 }
@@ -45,14 +45,15 @@ static inline __attribute__((always_inline)) void kernel_weights(int S, const sm
  * together in loops over the particles that the compiler vectorises (structure of arrays). The
  * same operations as kernel_weights, except that the stencil base is found by truncation: every
  * particle lies at least 2 cells inside the domain (sm_world_add_particles checks it, G2P clamps),
- * so X >= 2 and truncation equals floor. Lanes past cnt repeat particle i0 (ignored). */
+ * so X >= 2 and truncation equals floor. Lanes past cnt repeat particle i0 (ignored). X, the base
+ * and the offsets are formed in double from the double positions, then rounded to sm_real. */
 #define WCH 16
 typedef struct wchunk {
     int lb[D][WCH];
     sm_real w[D][4][WCH], dw[D][4][WCH], dp[D][4][WCH];
 } wchunk;
 
-static inline __attribute__((always_inline)) void chunk_weights(int S, const sm_real *restrict x, size_t n, int overread,
+static inline __attribute__((always_inline)) void chunk_weights(int S, const double *restrict x, size_t n, int overread,
                                                                 const uint32_t *restrict perm, uint32_t i0, int cnt,
                                                                 const sm_step_ctx *c, const int bc[3],
                                                                 wchunk *restrict wc) {
@@ -61,8 +62,8 @@ static inline __attribute__((always_inline)) void chunk_weights(int S, const sm_
      * exist from the first; else copied (lanes past cnt: the first particle). No gathers: they are
      * slow here. A partial chunk reads past its particles only with `overread` (P2G: nobody writes
      * positions then; G2P moves other blocks' particles concurrently). */
-    const sm_real *xb;
-    sm_real xl[WCH * D];
+    const double *xb;
+    double xl[WCH * D];
     const uint32_t q0 = perm[i0];
     if (perm[i0 + (uint32_t)cnt - 1] - q0 == (uint32_t)(cnt - 1) && (size_t)q0 + WCH <= n && (overread || cnt == WCH)) {
         xb = x + (size_t)q0 * D;
@@ -74,18 +75,19 @@ static inline __attribute__((always_inline)) void chunk_weights(int S, const sm_
         xb = xl;
     }
     for (int a = 0; a < D; a++) {
-        const sm_real lo = c->lo[a], inv = c->inv_dx, dx = c->dx;
+        const double lo = c->pos_lo[a], inv = c->pos_inv_dx, dx = c->pos_dx;
+        const sm_real inv_r = c->inv_dx;
         const int org = bc[a] << SM_BLOCK_BITS;
         for (int j = 0; j < WCH; j++) {
-            const sm_real X = (xb[j * D + a] - lo) * inv;
+            const double X = (xb[j * D + a] - lo) * inv;
             sm_real w4[4], d4[4];
-            const int b = S == 3 ? (int)(X - SM_R(0.5)) : (int)X - 1; /* X >= 2: truncation = floor */
-            sm_kernel_1d_at(S, X - (sm_real)b, w4, d4);
+            const int b = S == 3 ? (int)(X - 0.5) : (int)X - 1; /* X >= 2: truncation = floor */
+            sm_kernel_1d_at(S, (sm_real)(X - (double)b), w4, d4);
             wc->lb[a][j] = b - org;
             for (int k = 0; k < 4; k++) {
                 wc->w[a][k][j] = w4[k];
-                wc->dw[a][k][j] = d4[k] * inv;
-                wc->dp[a][k][j] = ((sm_real)(b + k) - X) * dx;
+                wc->dw[a][k][j] = d4[k] * inv_r;
+                wc->dp[a][k][j] = (sm_real)(((double)(b + k) - X) * dx);
             }
         }
     }

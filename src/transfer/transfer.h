@@ -31,7 +31,8 @@ void sm_transfer_cache_free(sm_transfer_cache *c);
  * (3.87)/(3.82), (3.91). The grid arrays must be zero on entry (the binning zeroes them). */
 typedef struct sm_p2g_io {
     size_t n;
-    const sm_real *x, *v, *B;     /* position, velocity, APIC B (APIC only) */
+    const double *x;              /* position (double: particles.h) */
+    const sm_real *v, *B;         /* velocity, APIC B (APIC only) */
     const sm_real *tau, *vol0;    /* Kirchhoff stress, initial volume */
     const uint16_t *mat;
     const sm_material_rt *mats;   /* density: mass = density * vol0 */
@@ -46,7 +47,8 @@ typedef struct sm_p2g_io {
  * collider back on its surface. */
 typedef struct sm_g2p_io {
     size_t n;
-    sm_real *x, *v, *B, *F;       /* in/out (B: out, APIC only) */
+    double *x;                    /* in/out: position (double: particles.h) */
+    sm_real *v, *B, *F;           /* in/out (B: out, APIC only) */
     const sm_bins *bins;
     sm_real *cache;
     const sm_real *vn, *vbar, *vtilde; /* sm_grid_vel (vn: FLIP only) */

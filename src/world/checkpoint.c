@@ -22,7 +22,7 @@
 #include "world/world.h"
 
 #define CKPT_MAGIC "SANDMPMC"
-#define CKPT_VERSION 1u
+#define CKPT_VERSION 2u /* 2: positions are double in both builds (particles.h) */
 #define CKPT_ENDIAN 0x01020304u
 #define CKPT_MAX_NAME 32
 

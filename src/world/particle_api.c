@@ -45,7 +45,7 @@ sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions,
     for (size_t i = 0; i < n; i++) {
         size_t p = first + i;
         for (int a = 0; a < d; a++) {
-            P->x[p * d + a] = (sm_real)positions[i * 3 + a];
+            P->x[p * d + a] = positions[i * 3 + a];
             P->v[p * d + a] = velocities ? (sm_real)velocities[i * 3 + a] : 0;
         }
         P->vol0[p] = (sm_real)vol0;

@@ -22,7 +22,8 @@ def test_views_have_the_library_layout(world):
     assert world.B.shape == world.F.shape == (n, d, d)
     for a in (world.q, world.alpha, world.volume, world.material):
         assert a.shape == (n,)
-    assert world.positions.dtype == sm.real_dtype == (np.float64 if sm.real_is_double else np.float32)
+    assert world.positions.dtype == np.float64  # positions are double in both builds
+    assert world.velocities.dtype == sm.real_dtype == (np.float64 if sm.real_is_double else np.float32)
     assert world.material.dtype == np.uint16
     # freshly seeded: undeformed, V0 = dx^3 / ppc, one material
     eye = np.eye(d, dtype=sm.real_dtype)

@@ -169,7 +169,11 @@ typedef struct sm_world_def {
     int gmres_max_iterations; /**< implicit: GMRES iterations per Newton step (the thesis caps it at 15). Default 15. */
     double gmres_tolerance;   /**< implicit: GMRES stops when the residual norm falls below this fraction of
                                   the right-hand side's. Default 1e-2 (inexact Newton). */
-    int threads;             /**< OpenMP threads; 0 = OpenMP's default. Results do not depend on it. */
+    int threads;             /**< OpenMP threads. 0 (default): chosen per step by the library between one
+                                  thread and OpenMP's default, whichever steps faster on this machine
+                                  now (small scenes, a machine shared with busy processes); it times
+                                  the steps and probes the other choice now and then. Results do not
+                                  depend on it. */
     size_t max_particles;    /**< refuse to grow beyond this many particles; 0 = no limit. */
 } sm_world_def;
 
@@ -522,6 +526,9 @@ typedef struct sm_diagnostics {
     int last_newton_iterations;   /**< implicit: Newton steps of the last time step */
     double last_newton_residual;  /**< implicit: final RMS residual of the last step divided by dt, m/s^2 */
     uint64_t newton_unconverged;  /**< implicit: time steps that hit newton_max_iterations */
+    int threads;                  /**< threads of the next step (def.threads, or the library's choice
+                                       when def.threads = 0) */
+    uint64_t thread_switches;     /**< def.threads = 0: times the library changed its choice */
 } sm_diagnostics;
 
 /** Computes the diagnostics (O(n)). */

@@ -231,6 +231,8 @@ sm_status sm_world_step(sm_world *w, double dt) {
                              (unsigned long long)w->steps);
     w->cfl_rejected = 0;
     if (!(dt > 0) || !isfinite(dt)) return sm_world_fail(w, SM_ERR_INVALID, "step: dt must be > 0, got %g", dt);
+    if (w->governed) w->threads = sm_governor_threads(&w->gov);
+    const double t_start = sm_seconds();
     if (w->p.n > 0) {
         const sm_status st = check_start(w, dt);
         if (st != SM_OK) return st;
@@ -248,6 +250,7 @@ sm_status sm_world_step(sm_world *w, double dt) {
     }
     advance_clock(w, dt);
     w->dt_cap = INFINITY;
+    if (w->governed) sm_governor_record(&w->gov, sm_seconds() - t_start, w->p.n);
     return SM_OK;
 }
 

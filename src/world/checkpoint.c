@@ -9,8 +9,8 @@
  *              no change here; time, steps, last_dt, min_dt, max_dt, stage_seconds, clamped,
  *              projected, newton (the implicit statistics), step_vmax2 (what the dt controller
  *              reads when not dirty), step_bad, dirty, failed, next_id, bins.reorders.
- *   derived    dim, stages, inv_dx, cells (from def); threads (the loader's own choice: results
- *              do not depend on it); mats[].law/density/alpha0/wave_speed (sm_world_add_material);
+ *   derived    dim, stages, inv_dx, cells (from def); threads, governed, gov (the loader's own
+ *              choice: results do not depend on it); mats[].law/density/alpha0/wave_speed (sm_world_add_material);
  *              the domain walls (from def; they never move); emitters' bmin/bmax/particle_mass
  *              (sm_world_add_emitter); the capacities (*_cap).
  *   scratch    emit_buf, grid, bins (but reorders), cache, imp: rebuilt by the next step from the

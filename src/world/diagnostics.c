@@ -98,6 +98,8 @@ void sm_world_diagnostics(const sm_world *w, sm_diagnostics *o) {
     o->min_dt = isfinite(w->min_dt) ? w->min_dt : 0;
     o->max_dt = w->max_dt;
     for (int s = 0; s < SM_STAGE_COUNT; s++) o->stage_seconds[s] = w->stage_seconds[s];
+    o->threads = w->governed ? sm_governor_threads(&w->gov) : w->threads;
+    o->thread_switches = w->gov.switches;
     o->clamped_particles = w->clamped;
     o->projected_particles = w->projected;
     o->newton_iterations = w->newton.newton_total;

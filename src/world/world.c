@@ -161,7 +161,7 @@ sm_status sm_world_create(const sm_world_def *def, sm_world **out, char *err, si
         }
     }
     sm_grid_init(&w->grid, def->dim, nodes, def->transfer == SM_TRANSFER_FLIP);
-    w->threads = sm_resolve_threads(def->threads);
+    sm_world_set_threads(w, def->threads);
     /* Domain walls: half-spaces 2 cells inside each face, behaving as def->wall_mode. */
     w->colliders = sm_calloc((size_t)(2 * def->dim + 4), sizeof *w->colliders);
     if (!w->colliders) {
@@ -227,6 +227,8 @@ void sm_world_destroy(sm_world *w) {
 void sm_world_set_threads(sm_world *w, int threads) {
     w->def.threads = threads;
     w->threads = sm_resolve_threads(threads);
+    w->governed = threads <= 0;
+    sm_governor_init(&w->gov, w->threads);
 }
 
 const sm_world_def *sm_world_get_def(const sm_world *w) { return &w->def; }

@@ -16,6 +16,7 @@
 #include "core/common.h"
 #include "grid/bin.h"
 #include "grid/grid.h"
+#include "integrate/governor.h"
 #include "integrate/implicit_solver.h"
 #include "integrate/stages.h"
 #include "material/material_rt.h"
@@ -37,7 +38,9 @@ struct sm_world {
     const sm_stages *stages; /* the 2D or 3D table, chosen at creation */
     double inv_dx;
     int cells[3];            /* cells per axis (1 along z in 2D) */
-    int threads;
+    int threads;             /* threads of the next (or current) step: def.threads, or the governor's */
+    int governed;            /* def.threads = 0: the governor chooses per step (integrate/governor.h) */
+    sm_governor gov;
 
     sm_material_rt *mats;
     int nmats, mats_cap;

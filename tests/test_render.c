@@ -620,19 +620,24 @@ static void test_ply_roundtrip(int dim) {
     CHECK(f.dim == dim);
     CHECK(f.has_velocity && f.has_q && f.has_material);
     CHECK(f.volume != NULL);
-    int ok = f.n == pv.n, q_nonzero = 0, mat1 = 0;
-    for (size_t i = 0; ok && i < pv.n; i++) {
+    int ok = f.n == pv.n && f.id != NULL, q_nonzero = 0, mat1 = 0;
+    size_t *at = malloc((pv.n ? pv.n : 1) * sizeof *at); /* at[id]: storage index; frames are in id order */
+    for (size_t i = 0; at && i < pv.n; i++) ok &= pv.id[i] < pv.n && ((at[pv.id[i]] = i), 1);
+    for (size_t k = 0; ok && at && k < pv.n; k++) {
+        const size_t i = at[k];
+        ok &= f.id[k] == (uint32_t)k;
         for (int a = 0; a < 3; a++) {
             float xe = a < dim ? (float)pv.x[i * (size_t)dim + (size_t)a] : 0.0f;
             float ve = a < dim ? (float)pv.v[i * (size_t)dim + (size_t)a] : 0.0f;
-            ok &= f.x[3 * i + (size_t)a] == xe && f.v[3 * i + (size_t)a] == ve;
+            ok &= f.x[3 * k + (size_t)a] == xe && f.v[3 * k + (size_t)a] == ve;
         }
-        ok &= f.material[i] == pv.material[i];
-        ok &= f.q[i] == (float)pv.q[i];
-        ok &= f.volume[i] == (float)pv.vol0[i];
+        ok &= f.material[k] == pv.material[i];
+        ok &= f.q[k] == (float)pv.q[i];
+        ok &= f.volume[k] == (float)pv.vol0[i];
         q_nonzero += pv.q[i] != 0;
         mat1 += pv.material[i] == 1;
     }
+    free(at);
     CHECK(ok);
     CHECK(mat1 > 0);
     printf("PLY round trip %dD: %zu particles, %d with q != 0\n", dim, f.n, q_nonzero);

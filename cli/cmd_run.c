@@ -20,6 +20,7 @@ typedef struct run_args {
     int frames, render, video;
     double end;
     int ckpt_every, keep, resume, force; /* --checkpoint-every (-1: default), --keep-checkpoints */
+    int overwrite;                       /* --overwrite: another run's files in --out are removed */
 } run_args;
 
 /* Default --checkpoint-every: a preview frame of the default scene (29,796 particles) took about
@@ -64,6 +65,8 @@ static sm_status parse_args(int argc, char **argv, run_args *a) {
             a->resume = 1;
         } else if (!strcmp(s, "--force")) {
             a->force = 1;
+        } else if (!strcmp(s, "--overwrite")) {
+            a->overwrite = 1;
         } else if (!strcmp(s, "--render")) {
             a->render = 1;
         } else if (!strcmp(s, "--video")) {
@@ -79,6 +82,10 @@ static sm_status parse_args(int argc, char **argv, run_args *a) {
         fprintf(stderr, "sandmpm run: give --frames or --end, not both\n");
         return SM_ERR_INVALID;
     }
+    if (a->resume && a->overwrite) {
+        fprintf(stderr, "sandmpm run: give --resume (continue the run in the folder) or --overwrite (replace it), not both\n");
+        return SM_ERR_INVALID;
+    }
     if (a->video && !a->render) a->render = 1;
     return SM_OK;
 }
@@ -89,12 +96,14 @@ typedef struct run_outputs {
     sm_png_sink_config png;
     cli_progress_config progress;
     sm_checkpoint_config ckpt;
-    sm_sink sinks[9];
+    sm_run_manifest_config manifest;
+    sm_sink sinks[10];
     int nsinks;
 } run_outputs;
 
-/* The sinks in the order they see each frame: frame files, the manifest, renders (which read the
- * manifest), diagnostics, progress. */
+/* The sinks in the order they see each frame: frame files, the render manifest, renders (which
+ * read it), diagnostics, checkpoints, the run manifest (which lists what the others wrote),
+ * progress. */
 static void choose_sinks(const run_args *a, const sm_scene_settings *st, run_outputs *o) {
     o->camera.has_camera = st->has_camera;
     memcpy(o->camera.eye, st->eye, sizeof st->eye);
@@ -114,6 +123,9 @@ static void choose_sinks(const run_args *a, const sm_scene_settings *st, run_out
     if (a->render) o->sinks[o->nsinks++] = sm_sink_png(&o->png);
     if (st->out_csv) o->sinks[o->nsinks++] = sm_sink_csv();
     if (o->ckpt.every > 0) o->sinks[o->nsinks++] = sm_sink_checkpoint(&o->ckpt);
+    o->manifest.written = (st->out_ply || a->render ? 1u << SM_FRAME_PLY : 0) | (st->out_vtk ? 1u << SM_FRAME_VTP : 0) |
+                          (a->render ? 1u << SM_FRAME_PNG : 0);
+    o->sinks[o->nsinks++] = sm_sink_run_manifest(&o->manifest);
     o->sinks[o->nsinks++] = cli_progress_sink(&o->progress);
     o->sinks[o->nsinks++] = cli_interrupt_note_sink();
 }
@@ -160,9 +172,10 @@ static void say_what_is_complete(const char *out, int frames_written, int nframe
 /* The frame loop into out; the message of a failure or a stop printed. *stopped: the signal that
  * stopped it early, or 0. */
 static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, int nframes, int first, uint64_t hash,
-                            int *stopped) {
+                            const sm_run_manifest *manifest, int *stopped) {
     const sm_scene_settings *st = sm_scene_get_settings(sc);
     run_outputs o;
+    o.manifest.start = *manifest;
     o.ckpt.every = a->ckpt_every;
     o.ckpt.keep = a->keep;
     o.ckpt.scene_hash = hash;
@@ -290,6 +303,18 @@ static sm_status resume_world(const run_args *a, sm_world *w, const char *out, u
     return SM_ERR_IO;
 }
 
+/* The run manifest's description of this run, before any frame (app/run_manifest.h). */
+static void describe_run(const run_args *a, const sm_scene_settings *set, uint64_t hash, int nframes, sm_run_manifest *m) {
+    sm_run_manifest_init(m);
+    snprintf(m->scene, sizeof m->scene, "%s", a->so.scene ? a->so.scene : "(built in) scenes/default.lua");
+    m->scene_hash = hash;
+    snprintf(m->quality, sizeof m->quality, "%s", a->so.quality ? a->so.quality : "preview");
+    m->fps = set->fps;
+    m->frames = nframes;
+    m->files = SM_RUNFILE_RENDER | SM_RUNFILE_POSES | SM_RUNFILE_CHECKPOINTS | (set->out_vtk ? SM_RUNFILE_PVD : 0u) |
+               (set->out_csv ? SM_RUNFILE_CSV : 0u) | (a->video ? SM_RUNFILE_VIDEO : 0u);
+}
+
 static int run_command(int argc, char **argv) {
     if (cli_help_requested(argc, argv)) {
         cli_usage_run(stdout);
@@ -317,10 +342,14 @@ static int run_command(int argc, char **argv) {
     const uint64_t hash = scene_hash(&a.so);
     if (a.ckpt_every < 0) a.ckpt_every = set->checkpoint_every >= 0 ? set->checkpoint_every : CLI_CHECKPOINT_EVERY;
     int first = 0;
+    sm_run_manifest manifest;
+    describe_run(&a, set, hash, nframes, &manifest);
+    const cli_claim claim = {a.resume, a.overwrite};
+    if (st == SM_OK) st = cli_claim_folder(out, &claim, &manifest);
     if (st == SM_OK && a.resume) st = resume_world(&a, sm_scene_world(sc), out, hash, &first);
     if (st == SM_OK) {
         cli_signals_install();
-        st = run_frames(&a, sc, out, nframes, first, hash, &stopped);
+        st = run_frames(&a, sc, out, nframes, first, hash, &manifest, &stopped);
     }
     sm_scene_destroy(sc);
     if (stopped) return cli_exit_code_signal(stopped);

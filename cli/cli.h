@@ -130,6 +130,8 @@ int cli_bench(int argc, char **argv);
 typedef struct cli_progress_config {
     const char *scene_label; /* "scenes/castle.lua" or "default scene" */
     const char *quality;     /* "preview", ... */
+    const char *out_dir;     /* the output folder, for the summary */
+    int quiet, verbose;      /* -q: no banner, progress or summary; -v: a detailed line per frame */
 } cli_progress_config;
 sm_sink cli_progress_sink(const cli_progress_config *config);
 

@@ -21,6 +21,7 @@ typedef struct run_args {
     double end;
     int ckpt_every, keep, resume, force; /* --checkpoint-every (-1: default), --keep-checkpoints */
     int overwrite;                       /* --overwrite: another run's files in --out are removed */
+    int quiet, verbose;                  /* -q/--quiet, -v/--verbose (the progress sink) */
 } run_args;
 
 /* Default --checkpoint-every: a preview frame of the default scene (29,796 particles) took about
@@ -67,6 +68,10 @@ static sm_status parse_args(int argc, char **argv, run_args *a) {
             a->force = 1;
         } else if (!strcmp(s, "--overwrite")) {
             a->overwrite = 1;
+        } else if (!strcmp(s, "-q") || !strcmp(s, "--quiet")) {
+            a->quiet = 1;
+        } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
+            a->verbose = 1;
         } else if (!strcmp(s, "--render")) {
             a->render = 1;
         } else if (!strcmp(s, "--video")) {
@@ -86,7 +91,16 @@ static sm_status parse_args(int argc, char **argv, run_args *a) {
         fprintf(stderr, "sandmpm run: give --resume (continue the run in the folder) or --overwrite (replace it), not both\n");
         return SM_ERR_INVALID;
     }
-    if (a->video && !a->render) a->render = 1;
+    if (a->quiet && a->verbose) {
+        fprintf(stderr, "sandmpm run: give -q/--quiet or -v/--verbose, not both\n");
+        return SM_ERR_INVALID;
+    }
+    if (a->video && !a->render) {
+        if (!a->quiet)
+            fprintf(stderr, "sandmpm run: note: --video needs the frames as pictures, so it renders them too (as "
+                            "--render: frame_NNNN.png)\n");
+        a->render = 1;
+    }
     return SM_OK;
 }
 
@@ -116,6 +130,8 @@ static void choose_sinks(const run_args *a, const sm_scene_settings *st, run_out
     o->png.threads = a->so.threads;
     o->progress.scene_label = a->so.scene ? a->so.scene : "default scene";
     o->progress.quality = a->so.quality ? a->so.quality : "preview";
+    o->progress.quiet = a->quiet;
+    o->progress.verbose = a->verbose;
     o->nsinks = 0;
     if (st->out_ply || a->render) o->sinks[o->nsinks++] = sm_sink_ply(); /* `render` reads them later */
     if (st->out_vtk) o->sinks[o->nsinks++] = sm_sink_vtk();
@@ -147,6 +163,9 @@ static sm_status frame_count(const run_args *a, const sm_scene_settings *set, in
                     1 / fps);
             return SM_ERR_INVALID;
         }
+        if (fabs(n - a->end * fps) > 1e-6 * fmax(1, n) && n <= CLI_MAX_FRAMES)
+            fprintf(stderr, "sandmpm run: warning: --end %g s is not a whole number of frames at %g fps (%.4g frames); "
+                            "running %.0f frames, to t = %.6g s\n", a->end, fps, a->end * fps, n, n / fps);
     }
     if (!(n >= 1 && n <= CLI_MAX_FRAMES)) {
         fprintf(stderr, "sandmpm run: %s%.0f frames at %g fps; a run has 1 to %d frames\n",
@@ -176,6 +195,7 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
     const sm_scene_settings *st = sm_scene_get_settings(sc);
     run_outputs o;
     o.manifest.start = *manifest;
+    o.progress.out_dir = out;
     o.ckpt.every = a->ckpt_every;
     o.ckpt.keep = a->keep;
     o.ckpt.scene_hash = hash;

@@ -201,6 +201,31 @@ expect 0 "render without a manifest" "$BIN" render "$m" --size 32x24
 has "$TMP/err" "note:" "render without a manifest: a note"
 [ -f "$m/frame_0007.png" ] && ok || bad "render without a manifest: not every frame rendered"
 
+# What the run says (stderr is not a terminal here: a line per frame): frame 0's line has no rate
+# or ETA yet (none is known), the end a summary line; -q says nothing on a sound run, -v a line per
+# frame with its steps and dt range; --end that is not a whole number of frames is warned about
+# (a whole one is not); --video without --render says that it renders.
+d=$TMP/talk
+expect 0 "talk: a run" "$BIN" run "$drop" --out "$d"
+grep '^frame 0/2' "$TMP/err" | grep -q 'particle-steps/s\|ETA' && bad "frame 0's line has a rate or ETA: $(grep '^frame 0/' "$TMP/err")" || ok
+has "$TMP/err" "computing frame 1" "frame 0's line says what is going on"
+grep '^frame 2/2' "$TMP/err" | grep -q 'particle-steps/s' && ok || bad "frame 2's line has no rate: $(cat "$TMP/err")"
+steps=$(tail -1 "$d/diagnostics.csv" | cut -d, -f4)
+has "$TMP/err" "sandmpm: done: 3 frames (0..2), $steps steps" "the summary: frames and steps"
+has "$TMP/err" "files in $d/ (listed in run_manifest.txt)" "the summary: where the files are"
+expect 0 "talk: -q" "$BIN" run "$drop" --out "$d" -q
+[ ! -s "$TMP/err" ] || [ "$(grep -vc 'replacing the earlier run' "$TMP/err")" -eq 0 ] && ok || bad "-q: $(cat "$TMP/err")"
+expect 0 "talk: --verbose" "$BIN" run "$drop" --out "$d" --verbose
+[ "$(grep -c '^frame [12]/2 .* steps (dt [0-9.e-]*\.\.[0-9.e-]* s)' "$TMP/err")" -eq 2 ] && ok || bad "-v: no detailed frame lines: $(cat "$TMP/err")"
+expect 2 "talk: -q -v" "$BIN" run "$drop" --out "$d" -q -v
+expect 0 "talk: --end not a whole number of frames" "$BIN" run "$drop" --out "$d" --end 0.05
+has "$TMP/err" "warning: --end 0.05 s is not a whole number of frames at 24 fps (1.2 frames); running 2 frames, to t = 0.0833333 s" "--end 0.05 warned"
+expect 0 "talk: --end a whole number of frames" "$BIN" run "$drop" --out "$d" --end 0.125
+grep -q "not a whole number" "$TMP/err" && bad "--end 0.125 (3 frames) warned: $(cat "$TMP/err")" || ok
+"$BIN" run "$drop" --out "$d" --frames 1 --video >/dev/null 2>"$TMP/err"
+has "$TMP/err" "note: --video needs the frames as pictures, so it renders them too" "--video without --render explained"
+[ -s "$d/frame_0001.png" ] && ok || bad "--video without --render: no PNG frames"
+
 # bench: `sandmpm bench --csv` in this build's precision and, if the program of the other
 # precision (sandmpm-float / sandmpm-double, CMake SM_SIBLING) is next to this one, in that one
 # too: the exact header, one row per dimension and thread count, sane fields. No timing checks.

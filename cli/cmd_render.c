@@ -1,6 +1,7 @@
 /* sandmpm render OUTDIR: a run's PLY frames to PNG images (and a video). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <limits.h>
 #include <string.h>
 #include <stdlib.h>
 #include <unistd.h>
@@ -14,14 +15,33 @@
 typedef struct render_args {
     const char *dir;
     int width, height, threads, video;
+    int from, to; /* --frames FROM..TO (default: all, 0..INT_MAX) */
     sm_color_mode color;
 } render_args;
+
+/* --frames N, FROM..TO, FROM.. or ..TO into *a; 0 if malformed. */
+static int parse_range(const char *s, render_args *a) {
+    const char *dots = strstr(s, "..");
+    char lo[32] = "", hi[32] = "";
+    if (!dots) {
+        if (!cli_parse_int(s, 0, INT_MAX, &a->from)) return 0;
+        a->to = a->from;
+        return 1;
+    }
+    if ((size_t)(dots - s) >= sizeof lo || strlen(dots + 2) >= sizeof hi) return 0;
+    memcpy(lo, s, (size_t)(dots - s));
+    snprintf(hi, sizeof hi, "%s", dots + 2);
+    if (lo[0] && !cli_parse_int(lo, 0, INT_MAX, &a->from)) return 0;
+    if (hi[0] && !cli_parse_int(hi, 0, INT_MAX, &a->to)) return 0;
+    return (lo[0] || hi[0]) && a->from <= a->to;
+}
 
 static sm_status parse_args(int argc, char **argv, render_args *a) {
     memset(a, 0, sizeof *a);
     a->width = 1280;
     a->height = 720;
     a->color = SM_COLOR_SAND;
+    a->to = INT_MAX;
     for (int i = 0; i < argc; i++) {
         const char *s = argv[i];
         if (!strcmp(s, "--color") && i + 1 < argc) {
@@ -48,6 +68,12 @@ static sm_status parse_args(int argc, char **argv, render_args *a) {
             cli_warn_threads("render", a->threads);
         } else if (!strcmp(s, "--video")) {
             a->video = 1;
+        } else if (!strcmp(s, "--frames") && i + 1 < argc) {
+            if (!parse_range(argv[++i], a)) {
+                fprintf(stderr, "sandmpm render: --frames: expected N, FROM..TO, FROM.. or ..TO (frame numbers, "
+                                "FROM <= TO), got \"%s\"\n", argv[i]);
+                return SM_ERR_INVALID;
+            }
         } else if (s[0] == '-' || a->dir) {
             fprintf(stderr, "sandmpm render: unexpected argument \"%s\" (see sandmpm render --help)\n", s);
             return SM_ERR_INVALID;
@@ -172,7 +198,14 @@ static int render_command(int argc, char **argv) {
     if (st == SM_OK) st = cli_remove_stale("render", a.dir);
     if (st != SM_OK) return cli_exit_code(st);
     cli_signals_install();
-    const int first = m.first[SM_FRAME_PLY], last = m.last[SM_FRAME_PLY];
+    const int first = a.from > m.first[SM_FRAME_PLY] ? a.from : m.first[SM_FRAME_PLY];
+    const int last = a.to < m.last[SM_FRAME_PLY] ? a.to : m.last[SM_FRAME_PLY];
+    if (first > last) {
+        fprintf(stderr, "sandmpm render: --frames: the run in %s/ has frames %d..%d, none of them asked for\n", a.dir,
+                m.first[SM_FRAME_PLY], m.last[SM_FRAME_PLY]);
+        return cli_exit_code(SM_ERR_INVALID);
+    }
+    count = last - first + 1;
     st = render_all(&a, count, first, last, &done);
     if (listed && done > 0) list_pngs(a.dir, &m, first, last);
     if (cli_stop) {

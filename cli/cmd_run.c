@@ -1,5 +1,6 @@
-/* sandmpm run [SCENE]: load and build the scene, then the frame loop (app/run.h) with the output
- * sinks the scene's outputs table asks for (app/sinks.h) and the progress line. */
+/* sandmpm run [SCENE]: load and build the scene, claim the output folder (out_folder.c), then the
+ * frame loop (app/run.h) with the output sinks the scene's outputs table asks for (app/sinks.h),
+ * the run manifest (app/run_manifest.h) and the progress line. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>

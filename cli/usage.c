@@ -57,7 +57,8 @@ void cli_usage_info(FILE *f) {
 }
 
 void cli_usage_render(FILE *f) {
-    fprintf(f, "usage: sandmpm render OUTDIR [--color sand|speed|material|q] [--size WxH] [--threads N] [--video]\n\n"
+    fprintf(f, "usage: sandmpm render OUTDIR [--frames N|FROM..TO] [--color sand|speed|material|q] [--size WxH]\n"
+               "                      [--threads N] [--video]\n\n"
                "Renders the OUTDIR/frame_NNNN.ply files that OUTDIR/run_manifest.txt lists (every one found\n"
                "in a folder without it) into OUTDIR/frame_NNNN.png: particles as lit\n"
                "spheres with shadows (disks in 2D), random brown tones (or colour by speed, material, or\n"
@@ -65,6 +66,7 @@ void cli_usage_render(FILE *f) {
                "  --color C    speed, q and material draw a legend (the colour map and its range, or the\n"
                "               materials' swatches) in the bottom-left corner\n"
                "  --size WxH   image size (default 1280x720)\n"
+               "  --frames R   only frame N, or frames FROM..TO (FROM.., ..TO: open ends)\n"
                "  --video      assemble OUTDIR/video.mp4 with ffmpeg (if installed)\n"
                "Ctrl-C stops after the frame in progress; PNG files are written atomically.\n");
 }

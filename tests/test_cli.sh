@@ -194,6 +194,15 @@ new_hash=$(sed -n 's/^scene_hash //p' "$m/run_manifest.txt")
 expect 0 "render: the listed frames" "$BIN" render "$m" --size 32x24
 [ -f "$m/frame_0001.png" ] && [ ! -e "$m/frame_0007.png" ] && ok || bad "render: rendered an unlisted frame (or not a listed one)"
 has "$m/run_manifest.txt" "frame_files png 0 1" "render: the PNG files listed"
+# render --frames: a range of the listed frames only
+rm -f "$m"/frame_*.png
+expect 0 "render --frames 1" "$BIN" render "$m" --size 32x24 --frames 1
+[ -f "$m/frame_0001.png" ] && [ ! -e "$m/frame_0000.png" ] && ok || bad "render --frames 1: $(ls "$m")"
+expect 0 "render --frames ..0" "$BIN" render "$m" --size 32x24 --frames ..0
+[ -f "$m/frame_0000.png" ] && ok || bad "render --frames ..0: no frame 0"
+expect 2 "render --frames 3..9 (none listed)" "$BIN" render "$m" --size 32x24 --frames 3..9
+has "$TMP/err" "has frames 0..1, none of them asked for" "render --frames outside the run: said so"
+expect 2 "render --frames 2..1" "$BIN" render "$m" --frames 2..1
 rm "$m/run_manifest.txt"
 expect 2 "run into frames without a manifest" "$BIN" run "$drop" --frames 1 --out "$m"
 has "$TMP/err" "but no run_manifest.txt" "no manifest: said so"

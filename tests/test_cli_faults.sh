@@ -40,7 +40,7 @@ no_temporaries() { # dir description
     [ -z "$t" ] && ok || bad "$2: temporaries left: $t"
 }
 
-# Every file under its final name is whole: PLY size = header + 42 bytes per vertex; VTK files
+# Every file under its final name is whole: PLY size = header + 46 bytes per vertex; VTK files
 # end with </VTKFile>; CSV lines complete (13 and 9 fields, a final newline).
 whole_files() { # dir description
     local d=$1 f n h size
@@ -49,7 +49,7 @@ whole_files() { # dir description
         n=$(sed -n 's/^element vertex //p' "$f" | head -1 | tr -d '\r')
         h=$(grep -abo 'end_header' "$f" | head -1 | cut -d: -f1)
         size=$(wc -c < "$f")
-        [ -n "$n" ] && [ -n "$h" ] && [ "$size" -eq $((h + 11 + 42 * n)) ] && ok || bad "$2: $f is cut short ($size bytes)"
+        [ -n "$n" ] && [ -n "$h" ] && [ "$size" -eq $((h + 11 + 46 * n)) ] && ok || bad "$2: $f is cut short ($size bytes)"
     done
     for f in "$d"/frame_*.vtp "$d"/frames.pvd; do
         [ -e "$f" ] || continue

@@ -181,6 +181,15 @@ static sm_status frame_count(const run_args *a, const sm_scene_settings *set, in
     return SM_OK;
 }
 
+/* After a numerical failure: the scene settings that make the steps smaller or the material
+ * softer (the library's message speaks of dt; a scene's author sets these). */
+static void say_what_to_change(void) {
+    fprintf(stderr, "sandmpm run: to get past it, change the scene (docs/scene-format.md): a smaller max_dt (the largest "
+                    "step), a smaller cfl or elastic_cfl (the step bounds from speed and stiffness), or a smaller E "
+                    "(stiffer materials need smaller steps); an initial velocity or a collider's speed that is too "
+                    "large for dx does the same\n");
+}
+
 /* What the folder holds after a run that did not finish. */
 static void say_what_is_complete(const char *out, int frames_written, int nframes) {
     if (frames_written > 0)
@@ -216,6 +225,7 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
     sm_status s = sm_run_frames(&cfg, o.sinks, o.nsinks, &res, err, sizeof err);
     *stopped = res.stopped ? (int)cli_stop : 0;
     if (s != SM_OK) fprintf(stderr, "sandmpm run: %s\n", err);
+    if (s == SM_ERR_NUMERICAL) say_what_to_change();
     if (*stopped)
         fprintf(stderr, "sandmpm run: stopped by %s after frame %d (t = %.6g s)\n", cli_signal_name(*stopped),
                 res.frames_written - 1, (res.frames_written - 1) / st->fps);

@@ -102,6 +102,7 @@ SANDMPM_TEST_NAN_AT_FRAME=10 "$BIN" run "$SCENE" --out "$TMP/n" --threads 1 --ch
 rc=$?
 [ "$rc" -eq 3 ] && ok || bad "numerical failure: exit $rc, want 3: $(cat "$TMP/err")"
 grep -q "frame 11 (from t" "$TMP/err" && grep -q "not finite\|non-finite\|NaN" "$TMP/err" && ok || bad "numerical failure: the frame and the NaN not named: $(cat "$TMP/err")"
+grep -q "a smaller max_dt" "$TMP/err" && grep -q "elastic_cfl" "$TMP/err" && ok || bad "numerical failure: the scene settings to change not named: $(cat "$TMP/err")"
 good=$(sed -n 's/.*the last good state (frame \([0-9]*\)) is in \(.*\)$/\2/p' "$TMP/err")
 [ -n "$good" ] && [ -f "$good" ] && ok || bad "no last-good checkpoint reported: $(cat "$TMP/err")"
 "$BIN" run "$SCENE" --out "$TMP/n" --threads 1 --checkpoint-every 0 --resume --force >/dev/null 2>"$TMP/err"

@@ -78,6 +78,10 @@ sm_status cli_claim_folder(const char *out, const cli_claim *c, sm_run_manifest 
         return SM_OK; /* resume_world checks the checkpoint's hash */
     }
     if (!found) return claim_unlisted(out, c->overwrite);
+    if (st == SM_ERR_IO) { /* there, but unreadable */
+        fprintf(stderr, "sandmpm run: %s\n", err);
+        return st;
+    }
     if (st != SM_OK) {
         if (c->overwrite) return claim_unlisted(out, 1);
         fprintf(stderr, "sandmpm run: %s; use --overwrite to remove the files of the run it belonged to, or --out "

@@ -12,6 +12,7 @@
 #include "app/io/files.h"
 #include "app/io/ply.h"
 #include "app/io/vtk.h"
+#include "app/run_manifest.h"
 #include "test_util.h"
 
 /* Coordinate a of particle i (positions may be float, double or another type than sm_real). */
@@ -141,6 +142,76 @@ static void follow_ids(sm_world *w, int dim) {
     sm_frame_free(&a);
     sm_frame_free(&b);
     sm_frame_free(&c);
+}
+
+/* The run manifest: written and read back field by field; a malformed line named; removal takes
+ * the listed files and the manifest, and leaves the others. */
+static void touch(const char *dir, const char *name) {
+    char p[512];
+    snprintf(p, sizeof p, "%s/%s", dir, name);
+    FILE *f = fopen(p, "w");
+    if (f) fclose(f);
+}
+
+static int exists(const char *dir, const char *name) {
+    char p[512];
+    snprintf(p, sizeof p, "%s/%s", dir, name);
+    return access(p, F_OK) == 0;
+}
+
+static void test_run_manifest(void) {
+    char dir[] = "test_output_manifest_XXXXXX", err[SM_MSG_MAX];
+    CHECK(mkdtemp(dir) != NULL);
+    sm_run_manifest m, r;
+    sm_run_manifest_init(&m);
+    snprintf(m.scene, sizeof m.scene, "scenes/a b.lua");
+    m.scene_hash = 0x0123456789abcdefull;
+    snprintf(m.quality, sizeof m.quality, "test");
+    m.fps = 24;
+    m.frames = 9;
+    snprintf(m.state, sizeof m.state, "stopped");
+    m.first[SM_FRAME_PLY] = 0, m.last[SM_FRAME_PLY] = 2;
+    m.first[SM_FRAME_PNG] = 1, m.last[SM_FRAME_PNG] = 1;
+    m.files = SM_RUNFILE_PVD | SM_RUNFILE_CHECKPOINTS;
+    CHECK(sm_run_manifest_write(dir, &m, err, sizeof err) == SM_OK);
+    int found = 0;
+    CHECK(sm_run_manifest_read(dir, &r, &found, err, sizeof err) == SM_OK && found);
+    CHECK(!strcmp(r.scene, m.scene) && r.scene_hash == m.scene_hash && !strcmp(r.quality, "test") && r.fps == 24 &&
+          r.frames == 9 && !strcmp(r.state, "stopped") && r.files == m.files);
+    CHECK(sm_run_manifest_count(&r, SM_FRAME_PLY) == 3 && sm_run_manifest_count(&r, SM_FRAME_VTP) == 0 &&
+          r.first[SM_FRAME_PNG] == 1 && r.last[SM_FRAME_PNG] == 1);
+    for (int f = 0; f < 3; f++) {
+        char name[32];
+        snprintf(name, sizeof name, "frame_%04d.ply", f);
+        touch(dir, name);
+    }
+    touch(dir, "frame_0001.png");
+    touch(dir, "frames.pvd");
+    touch(dir, "frame_0003.ply"); /* not listed */
+    touch(dir, "diagnostics.csv"); /* not listed */
+    int removed = 0;
+    CHECK(sm_run_manifest_remove(dir, &r, &removed, err, sizeof err) == SM_OK);
+    CHECK(removed == 6); /* 3 PLY, 1 PNG, frames.pvd, the manifest */
+    CHECK(!exists(dir, "frame_0000.ply") && !exists(dir, "frame_0001.png") && !exists(dir, "frames.pvd") &&
+          !exists(dir, SM_RUN_MANIFEST_NAME));
+    CHECK(exists(dir, "frame_0003.ply") && exists(dir, "diagnostics.csv"));
+    /* a folder without one: the frame files found */
+    int nfound = 0;
+    CHECK(sm_run_manifest_scan(dir, &r, &nfound, err, sizeof err) == SM_OK && nfound == 1 &&
+          r.first[SM_FRAME_PLY] == 3 && r.last[SM_FRAME_PLY] == 3);
+    CHECK(sm_run_manifest_read(dir, &r, &found, err, sizeof err) == SM_ERR_IO && !found);
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", dir, SM_RUN_MANIFEST_NAME);
+    FILE *f = fopen(path, "w");
+    if (f) {
+        fputs("sandmpm-run 1\nscene x\nframe_files ply 5 2\n", f);
+        fclose(f);
+    }
+    CHECK(sm_run_manifest_read(dir, &r, &found, err, sizeof err) == SM_ERR_INVALID && found && strstr(err, ":3:"));
+    printf("run manifest: written, read back, %d listed files removed, a malformed line named (%s)\n", removed, err);
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    CHECK(system(cmd) == 0);
 }
 
 int main(void) {
@@ -291,5 +362,6 @@ int main(void) {
         follow_ids(w, dim);
         sm_world_destroy(w);
     }
+    test_run_manifest();
     return sm_test_summary("test_output");
 }

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "app/frame.h"
+#include "app/io/fields.h"
 
 void sm_frame_free(sm_frame *f) {
     if (!f) return;
@@ -36,22 +37,27 @@ sm_status sm_frame_from_world(const sm_world *w, sm_frame *f, char *err, size_t 
     memset(f, 0, sizeof *f);
     sm_particles_view pv;
     sm_world_particles(w, &pv);
-    if (sm_frame_alloc(f, pv.n, 1, 0) != SM_OK) {
+    size_t *order = sm_out_id_order(&pv);
+    if (!order || sm_frame_alloc(f, pv.n, 1, 1) != SM_OK) {
+        free(order);
         sm_frame_free(f);
         if (err && errlen) snprintf(err, errlen, "out of memory for a frame of %zu particles", pv.n);
         return SM_ERR_NOMEM;
     }
     const int d = pv.dim;
     f->dim = d;
-    for (size_t i = 0; i < pv.n; i++) {
+    for (size_t k = 0; k < pv.n; k++) { /* k: id order, as the frame files (app/io/fields.h) */
+        const size_t i = order[k];
         for (int a = 0; a < d; a++) {
-            f->x[3 * i + (size_t)a] = (float)pv.x[i * (size_t)d + (size_t)a];
-            f->v[3 * i + (size_t)a] = (float)pv.v[i * (size_t)d + (size_t)a];
+            f->x[3 * k + (size_t)a] = (float)pv.x[i * (size_t)d + (size_t)a];
+            f->v[3 * k + (size_t)a] = (float)pv.v[i * (size_t)d + (size_t)a];
         }
-        f->q[i] = (float)pv.q[i];
-        f->volume[i] = (float)pv.vol0[i];
-        f->material[i] = pv.material[i];
+        f->q[k] = (float)pv.q[i];
+        f->volume[k] = (float)pv.vol0[i];
+        f->material[k] = pv.material[i];
+        f->id[k] = pv.id[i];
     }
+    free(order);
     f->has_velocity = f->has_q = f->has_material = 1;
     const sm_world_def *def = sm_world_get_def(w);
     f->has_domain = 1;

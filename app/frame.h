@@ -32,7 +32,8 @@ typedef struct sm_frame {
  * Returns SM_OK, or SM_ERR_NOMEM (the frame then holds what was allocated: sm_frame_free it). */
 sm_status sm_frame_alloc(sm_frame *f, size_t n, int want_volume, int want_id);
 
-/* Fills a frame from a world's particles (volume from V0, domain from the world's definition).
+/* Fills a frame from a world's particles in id order, as the frame files hold them (volume from
+ * V0, ids, domain from the world's definition).
  * Returns SM_OK or SM_ERR_NOMEM (message in err; the frame is then empty). */
 sm_status sm_frame_from_world(const sm_world *w, sm_frame *f, char *err, size_t errlen);
 

@@ -72,6 +72,8 @@ typedef struct sm_render_opts {
     int shadow_size;            /* particle shadow map texels along its longer side; 0 (default): auto,
                                    max(width, height) clamped to [512, 4096] */
     uint64_t seed;              /* seed of the per-particle tones. Default 1. */
+    int legend;                 /* 1: a colour legend in the bottom-left corner (speed and q: the map and
+                                   its range; material: a swatch per material); 0 (default): none */
     int threads;                /* OpenMP threads; 0 = OpenMP's default. Output does not depend on it. */
     int has_camera;             /* 0 (default): fitted to the domain grown by 5% (or the particles' box):
                                    3D from the front-left (azimuth -35 deg) and above (28 deg), fov 35 deg,

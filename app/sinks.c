@@ -273,12 +273,15 @@ sm_sink sm_sink_png(const sm_png_sink_config *config) {
 
 typedef struct csv_state {
     sm_stream f;
-    int rows; /* frame rows written */
+    int rows;            /* frame rows written */
+    sm_diagnostics prev; /* the previous frame's, for the _frame columns */
+    double prev_wall;    /* its sm_run_elapsed */
 } csv_state;
 
 static sm_status csv_begin(sm_sink *s, const sm_run_info *run, char *err, size_t errlen) {
     csv_state *c = new_state(sizeof *c, err, errlen);
     if (!c) return SM_ERR_NOMEM;
+    sm_world_diagnostics(run->w, &c->prev); /* frame 0's, or the resumed checkpoint's */
     char path[SM_PATH_MAX], line[SM_CSV_LINE_MAX];
     sm_status st = join(path, sizeof path, run->out_dir, "diagnostics.csv", err, errlen);
     char *rows = st == SM_OK ? rows_before(path, run->first_frame) : NULL;
@@ -297,7 +300,10 @@ static sm_status csv_begin(sm_sink *s, const sm_run_info *run, char *err, size_t
 static sm_status csv_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t errlen) {
     csv_state *c = s->state;
     char line[SM_CSV_LINE_MAX];
-    int n = sm_csv_row(line, sizeof line, fr->frame, fr->d, sm_run_elapsed(fr));
+    const double wall = sm_run_elapsed(fr);
+    int n = sm_csv_row(line, sizeof line, fr->frame, fr->d, &c->prev, wall - c->prev_wall, wall);
+    c->prev = *fr->d;
+    c->prev_wall = wall;
     sm_status st = sm_stream_append(&c->f, line, n < (int)sizeof line ? (size_t)n : sizeof line - 1, err, errlen);
     c->rows += st == SM_OK;
     return st;

@@ -7,6 +7,8 @@
  *             the colliders at the world's poses of the frame; it reads render.txt, so it comes
  *             after the manifest sink
  *   csv       diagnostics.csv, a row per frame (app/io/csv.h)
+ * The run manifest (run_manifest.txt) has its sink beside its format, app/run_manifest.h; it comes
+ * after these, as it lists what they wrote.
  * Frame files are written atomically, the two CSV files a whole line at a time (app/io/files.h); a
  * failed run removes a CSV file that got no frame's line. */
 #ifndef SM_APP_SINKS_H

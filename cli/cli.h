@@ -3,7 +3,8 @@
  *   exit.c      the one table from sm_status to exit code
  *   usage.c     the help texts
  *   options.c   what the commands share: option parsing, loading and building a scene, the video
- *   cmd_run.c   `sandmpm run`: the sinks and the frame loop (app/run.h); progress.c: its progress line
+ *   cmd_run.c   `sandmpm run`: the sinks and the frame loop (app/run.h); progress.c: its progress line;
+ *               out_folder.c: the output folder claimed for the run (no two runs' files mixed)
  *   cmd_info.c, cmd_render.c, cmd_bench.c: the other commands; signals.c: SIGINT and SIGTERM */
 #ifndef SM_CLI_H
 #define SM_CLI_H
@@ -13,6 +14,7 @@
 #include <stdio.h>
 
 #include "app/run.h"
+#include "app/run_manifest.h"
 #include "app/scene.h"
 #include "sandmpm/sandmpm.h"
 
@@ -88,6 +90,19 @@ sm_status cli_remove_stale(const char *cmd, const char *dir);
 sm_status cli_make_video(const char *dir, double fps);
 
 /* ------------------------------------------------------------------------------------------ */
+/* out_folder.c                                                                                 */
+
+typedef struct cli_claim {
+    int resume, overwrite; /* --resume, --overwrite */
+} cli_claim;
+/* Claims the (existing) folder out for a run described by *start (scene, hash, ...): refuses (exit
+ * code 2, SM_ERR_INVALID, message printed) a folder holding another run's frames or frames
+ * without a manifest unless overwrite; removes the listed files of an earlier run of the same
+ * scene, or of any run with overwrite; with resume removes nothing and carries the earlier
+ * manifest's frame lists and files into *start. SM_OK, SM_ERR_INVALID or SM_ERR_IO. */
+sm_status cli_claim_folder(const char *out, const cli_claim *c, sm_run_manifest *start);
+
+/* ------------------------------------------------------------------------------------------ */
 /* signals.c                                                                                    */
 
 /* 0, or the signal (SIGINT, SIGTERM) that asked the command to stop after the frame in progress. */
@@ -115,6 +130,8 @@ int cli_bench(int argc, char **argv);
 typedef struct cli_progress_config {
     const char *scene_label; /* "scenes/castle.lua" or "default scene" */
     const char *quality;     /* "preview", ... */
+    const char *out_dir;     /* the output folder, for the summary */
+    int quiet, verbose;      /* -q: no banner, progress or summary; -v: a detailed line per frame */
 } cli_progress_config;
 sm_sink cli_progress_sink(const cli_progress_config *config);
 

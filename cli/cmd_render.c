@@ -1,7 +1,7 @@
 /* sandmpm render OUTDIR: a run's PLY frames to PNG images (and a video). */
 #define _POSIX_C_SOURCE 200809L
-#include <dirent.h>
 #include <errno.h>
+#include <limits.h>
 #include <string.h>
 #include <stdlib.h>
 #include <unistd.h>
@@ -15,14 +15,33 @@
 typedef struct render_args {
     const char *dir;
     int width, height, threads, video;
+    int from, to; /* --frames FROM..TO (default: all, 0..INT_MAX) */
     sm_color_mode color;
 } render_args;
+
+/* --frames N, FROM..TO, FROM.. or ..TO into *a; 0 if malformed. */
+static int parse_range(const char *s, render_args *a) {
+    const char *dots = strstr(s, "..");
+    char lo[32] = "", hi[32] = "";
+    if (!dots) {
+        if (!cli_parse_int(s, 0, INT_MAX, &a->from)) return 0;
+        a->to = a->from;
+        return 1;
+    }
+    if ((size_t)(dots - s) >= sizeof lo || strlen(dots + 2) >= sizeof hi) return 0;
+    memcpy(lo, s, (size_t)(dots - s));
+    snprintf(hi, sizeof hi, "%s", dots + 2);
+    if (lo[0] && !cli_parse_int(lo, 0, INT_MAX, &a->from)) return 0;
+    if (hi[0] && !cli_parse_int(hi, 0, INT_MAX, &a->to)) return 0;
+    return (lo[0] || hi[0]) && a->from <= a->to;
+}
 
 static sm_status parse_args(int argc, char **argv, render_args *a) {
     memset(a, 0, sizeof *a);
     a->width = 1280;
     a->height = 720;
     a->color = SM_COLOR_SAND;
+    a->to = INT_MAX;
     for (int i = 0; i < argc; i++) {
         const char *s = argv[i];
         if (!strcmp(s, "--color") && i + 1 < argc) {
@@ -49,6 +68,12 @@ static sm_status parse_args(int argc, char **argv, render_args *a) {
             cli_warn_threads("render", a->threads);
         } else if (!strcmp(s, "--video")) {
             a->video = 1;
+        } else if (!strcmp(s, "--frames") && i + 1 < argc) {
+            if (!parse_range(argv[++i], a)) {
+                fprintf(stderr, "sandmpm render: --frames: expected N, FROM..TO, FROM.. or ..TO (frame numbers, "
+                                "FROM <= TO), got \"%s\"\n", argv[i]);
+                return SM_ERR_INVALID;
+            }
         } else if (s[0] == '-' || a->dir) {
             fprintf(stderr, "sandmpm render: unexpected argument \"%s\" (see sandmpm render --help)\n", s);
             return SM_ERR_INVALID;
@@ -66,41 +91,51 @@ static sm_status parse_args(int argc, char **argv, render_args *a) {
     return st;
 }
 
-/* The frame number of a frame file's name "frame_NNNN.ply" (at least 4 digits, as the run writes
- * them: %04d), or -1. */
-static int frame_number(const char *name) {
-    size_t n = strlen(name), d = 6;
-    if (n < 14 || strncmp(name, "frame_", 6) != 0 || strcmp(name + n - 4, ".ply") != 0) return -1;
-    while (d < n - 4 && name[d] >= '0' && name[d] <= '9') d++;
-    if (d != n - 4 || d - 6 < 4 || d - 6 > 9) return -1;
-    int f = atoi(name + 6);
-    char again[32];
-    snprintf(again, sizeof again, "frame_%04d.ply", f);
-    return strcmp(again, name) == 0 ? f : -1; /* not frame_00012.ply */
+/* The frames to render: those OUTDIR/run_manifest.txt lists (*m, *listed = 1), or in a folder
+ * without one (an older version's run) every frame_NNNN.ply found, with a note. */
+static sm_status find_frames(const char *dir, sm_run_manifest *m, int *listed, int *count) {
+    char err[SM_MSG_MAX];
+    int found = 0, n = 0;
+    sm_status st = sm_run_manifest_read(dir, m, &found, err, sizeof err);
+    *listed = st == SM_OK;
+    if (found && st != SM_OK) {
+        fprintf(stderr, "sandmpm render: %s\n", err);
+        return st == SM_ERR_INVALID ? SM_ERR_INVALID : SM_ERR_IO;
+    }
+    if (!found) {
+        st = sm_run_manifest_scan(dir, m, &n, err, sizeof err);
+        if (st != SM_OK) {
+            fprintf(stderr, "sandmpm render: %s\n", err);
+            return st;
+        }
+    }
+    *count = sm_run_manifest_count(m, SM_FRAME_PLY);
+    if (*count == 0) {
+        if (*listed)
+            fprintf(stderr, "sandmpm render: %s/%s lists no PLY frames (the scene's outputs.ply is off; run it with "
+                            "--render, or with outputs.ply = true)\n", dir, SM_RUN_MANIFEST_NAME);
+        else
+            fprintf(stderr, "sandmpm render: %s: no frame_NNNN.ply files (run `sandmpm run --out %s` first)\n", dir, dir);
+        return SM_ERR_IO;
+    }
+    if (!*listed)
+        fprintf(stderr, "sandmpm render: note: %s/ has no %s (a run of an older sandmpm?): rendering every "
+                        "frame_NNNN.ply in it, frames %d..%d\n", dir, SM_RUN_MANIFEST_NAME, m->first[SM_FRAME_PLY],
+                m->last[SM_FRAME_PLY]);
+    return SM_OK;
 }
 
-/* The frame_NNNN.ply files in dir: how many, and the largest frame number. */
-static sm_status scan_frames(const char *dir, int *count, int *maxf) {
-    DIR *dd = opendir(dir);
-    if (!dd) {
-        fprintf(stderr, "sandmpm render: %s: %s\n", dir, strerror(errno));
-        return SM_ERR_IO;
+/* The run manifest lists the PNG frames rendered too (so that --overwrite removes them). */
+static void list_pngs(const char *dir, sm_run_manifest *m, int first, int last) {
+    char err[SM_MSG_MAX];
+    if (sm_run_manifest_count(m, SM_FRAME_PNG) > 0) {
+        if (m->first[SM_FRAME_PNG] < first) first = m->first[SM_FRAME_PNG];
+        if (m->last[SM_FRAME_PNG] > last) last = m->last[SM_FRAME_PNG];
     }
-    *maxf = -1;
-    *count = 0;
-    struct dirent *de;
-    while ((de = readdir(dd))) {
-        int fno = frame_number(de->d_name);
-        if (fno < 0) continue;
-        ++*count;
-        if (fno > *maxf) *maxf = fno;
-    }
-    closedir(dd);
-    if (*count == 0) {
-        fprintf(stderr, "sandmpm render: %s: no frame_NNNN.ply files (run `sandmpm run --out %s` first)\n", dir, dir);
-        return SM_ERR_IO;
-    }
-    return SM_OK;
+    m->first[SM_FRAME_PNG] = first;
+    m->last[SM_FRAME_PNG] = last;
+    if (sm_run_manifest_write(dir, m, err, sizeof err) != SM_OK)
+        fprintf(stderr, "sandmpm render: warning: could not list the PNG files in the run manifest: %s\n", err);
 }
 
 /* Frame f's PLY to its PNG (nothing if there is no such PLY). *done counts the frames rendered. */
@@ -126,15 +161,15 @@ static sm_status make_video(const char *dir) {
     return cli_make_video(dir, sm_csv_read_fps(p, 24));
 }
 
-/* Renders the frames in order; stops early after a frame if cli_stop is set. */
-static sm_status render_all(const render_args *a, int count, int maxf, int *done) {
+/* Renders frames first..last in order; stops early after a frame if cli_stop is set. */
+static sm_status render_all(const render_args *a, int count, int first, int last, int *done) {
     char err[SM_MSG_MAX], note[SM_MSG_MAX];
     sm_render_job job;
     sm_status st = sm_render_job_open(&job, a->dir, a->width, a->height, a->color, a->threads, err, sizeof err);
     const int tty = isatty(fileno(stderr));
     const double t0 = sm_run_wall();
     *done = 0;
-    for (int f = 0; f <= maxf && st == SM_OK && !cli_stop; f++) {
+    for (int f = first; f <= last && st == SM_OK && !cli_stop; f++) {
         st = render_frame(&job, a->dir, f, done, err, sizeof err);
         if (st == SM_OK && tty) fprintf(stderr, "\rrendered %d/%d", *done, count);
         snprintf(note, sizeof note, "sandmpm render: stopped at once; %d frames rendered to %s/", *done, a->dir);
@@ -156,13 +191,23 @@ static int render_command(int argc, char **argv) {
         return cli_exit_code(SM_OK);
     }
     render_args a;
-    int count, maxf, done = 0;
+    sm_run_manifest m;
+    int count = 0, listed = 0, done = 0;
     sm_status st = parse_args(argc, argv, &a);
-    if (st == SM_OK) st = scan_frames(a.dir, &count, &maxf);
+    if (st == SM_OK) st = find_frames(a.dir, &m, &listed, &count);
     if (st == SM_OK) st = cli_remove_stale("render", a.dir);
     if (st != SM_OK) return cli_exit_code(st);
     cli_signals_install();
-    st = render_all(&a, count, maxf, &done);
+    const int first = a.from > m.first[SM_FRAME_PLY] ? a.from : m.first[SM_FRAME_PLY];
+    const int last = a.to < m.last[SM_FRAME_PLY] ? a.to : m.last[SM_FRAME_PLY];
+    if (first > last) {
+        fprintf(stderr, "sandmpm render: --frames: the run in %s/ has frames %d..%d, none of them asked for\n", a.dir,
+                m.first[SM_FRAME_PLY], m.last[SM_FRAME_PLY]);
+        return cli_exit_code(SM_ERR_INVALID);
+    }
+    count = last - first + 1;
+    st = render_all(&a, count, first, last, &done);
+    if (listed && done > 0) list_pngs(a.dir, &m, first, last);
     if (cli_stop) {
         fprintf(stderr, "sandmpm render: stopped by %s after %d of %d frames\n", cli_signal_name(cli_stop), done, count);
         return cli_exit_code_signal(cli_stop);

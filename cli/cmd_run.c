@@ -1,5 +1,6 @@
-/* sandmpm run [SCENE]: load and build the scene, then the frame loop (app/run.h) with the output
- * sinks the scene's outputs table asks for (app/sinks.h) and the progress line. */
+/* sandmpm run [SCENE]: load and build the scene, claim the output folder (out_folder.c), then the
+ * frame loop (app/run.h) with the output sinks the scene's outputs table asks for (app/sinks.h),
+ * the run manifest (app/run_manifest.h) and the progress line. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -20,6 +21,8 @@ typedef struct run_args {
     int frames, render, video;
     double end;
     int ckpt_every, keep, resume, force; /* --checkpoint-every (-1: default), --keep-checkpoints */
+    int overwrite;                       /* --overwrite: another run's files in --out are removed */
+    int quiet, verbose;                  /* -q/--quiet, -v/--verbose (the progress sink) */
 } run_args;
 
 /* Default --checkpoint-every: a preview frame of the default scene (29,796 particles) took about
@@ -64,6 +67,12 @@ static sm_status parse_args(int argc, char **argv, run_args *a) {
             a->resume = 1;
         } else if (!strcmp(s, "--force")) {
             a->force = 1;
+        } else if (!strcmp(s, "--overwrite")) {
+            a->overwrite = 1;
+        } else if (!strcmp(s, "-q") || !strcmp(s, "--quiet")) {
+            a->quiet = 1;
+        } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
+            a->verbose = 1;
         } else if (!strcmp(s, "--render")) {
             a->render = 1;
         } else if (!strcmp(s, "--video")) {
@@ -79,7 +88,20 @@ static sm_status parse_args(int argc, char **argv, run_args *a) {
         fprintf(stderr, "sandmpm run: give --frames or --end, not both\n");
         return SM_ERR_INVALID;
     }
-    if (a->video && !a->render) a->render = 1;
+    if (a->resume && a->overwrite) {
+        fprintf(stderr, "sandmpm run: give --resume (continue the run in the folder) or --overwrite (replace it), not both\n");
+        return SM_ERR_INVALID;
+    }
+    if (a->quiet && a->verbose) {
+        fprintf(stderr, "sandmpm run: give -q/--quiet or -v/--verbose, not both\n");
+        return SM_ERR_INVALID;
+    }
+    if (a->video && !a->render) {
+        if (!a->quiet)
+            fprintf(stderr, "sandmpm run: note: --video needs the frames as pictures, so it renders them too (as "
+                            "--render: frame_NNNN.png)\n");
+        a->render = 1;
+    }
     return SM_OK;
 }
 
@@ -89,12 +111,14 @@ typedef struct run_outputs {
     sm_png_sink_config png;
     cli_progress_config progress;
     sm_checkpoint_config ckpt;
-    sm_sink sinks[9];
+    sm_run_manifest_config manifest;
+    sm_sink sinks[10];
     int nsinks;
 } run_outputs;
 
-/* The sinks in the order they see each frame: frame files, the manifest, renders (which read the
- * manifest), diagnostics, progress. */
+/* The sinks in the order they see each frame: frame files, the render manifest, renders (which
+ * read it), diagnostics, checkpoints, the run manifest (which lists what the others wrote),
+ * progress. */
 static void choose_sinks(const run_args *a, const sm_scene_settings *st, run_outputs *o) {
     o->camera.has_camera = st->has_camera;
     memcpy(o->camera.eye, st->eye, sizeof st->eye);
@@ -107,6 +131,8 @@ static void choose_sinks(const run_args *a, const sm_scene_settings *st, run_out
     o->png.threads = a->so.threads;
     o->progress.scene_label = a->so.scene ? a->so.scene : "default scene";
     o->progress.quality = a->so.quality ? a->so.quality : "preview";
+    o->progress.quiet = a->quiet;
+    o->progress.verbose = a->verbose;
     o->nsinks = 0;
     if (st->out_ply || a->render) o->sinks[o->nsinks++] = sm_sink_ply(); /* `render` reads them later */
     if (st->out_vtk) o->sinks[o->nsinks++] = sm_sink_vtk();
@@ -114,6 +140,9 @@ static void choose_sinks(const run_args *a, const sm_scene_settings *st, run_out
     if (a->render) o->sinks[o->nsinks++] = sm_sink_png(&o->png);
     if (st->out_csv) o->sinks[o->nsinks++] = sm_sink_csv();
     if (o->ckpt.every > 0) o->sinks[o->nsinks++] = sm_sink_checkpoint(&o->ckpt);
+    o->manifest.written = (st->out_ply || a->render ? 1u << SM_FRAME_PLY : 0) | (st->out_vtk ? 1u << SM_FRAME_VTP : 0) |
+                          (a->render ? 1u << SM_FRAME_PNG : 0);
+    o->sinks[o->nsinks++] = sm_sink_run_manifest(&o->manifest);
     o->sinks[o->nsinks++] = cli_progress_sink(&o->progress);
     o->sinks[o->nsinks++] = cli_interrupt_note_sink();
 }
@@ -135,6 +164,9 @@ static sm_status frame_count(const run_args *a, const sm_scene_settings *set, in
                     1 / fps);
             return SM_ERR_INVALID;
         }
+        if (fabs(n - a->end * fps) > 1e-6 * fmax(1, n) && n <= CLI_MAX_FRAMES)
+            fprintf(stderr, "sandmpm run: warning: --end %g s is not a whole number of frames at %g fps (%.4g frames); "
+                            "running %.0f frames, to t = %.6g s\n", a->end, fps, a->end * fps, n, n / fps);
     }
     if (!(n >= 1 && n <= CLI_MAX_FRAMES)) {
         fprintf(stderr, "sandmpm run: %s%.0f frames at %g fps; a run has 1 to %d frames\n",
@@ -149,6 +181,15 @@ static sm_status frame_count(const run_args *a, const sm_scene_settings *set, in
     return SM_OK;
 }
 
+/* After a numerical failure: the scene settings that make the steps smaller or the material
+ * softer (the library's message speaks of dt; a scene's author sets these). */
+static void say_what_to_change(void) {
+    fprintf(stderr, "sandmpm run: to get past it, change the scene (docs/scene-format.md): a smaller max_dt (the largest "
+                    "step), a smaller cfl or elastic_cfl (the step bounds from speed and stiffness), or a smaller E "
+                    "(stiffer materials need smaller steps); an initial velocity or a collider's speed that is too "
+                    "large for dx does the same\n");
+}
+
 /* What the folder holds after a run that did not finish. */
 static void say_what_is_complete(const char *out, int frames_written, int nframes) {
     if (frames_written > 0)
@@ -160,9 +201,11 @@ static void say_what_is_complete(const char *out, int frames_written, int nframe
 /* The frame loop into out; the message of a failure or a stop printed. *stopped: the signal that
  * stopped it early, or 0. */
 static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, int nframes, int first, uint64_t hash,
-                            int *stopped) {
+                            const sm_run_manifest *manifest, int *stopped) {
     const sm_scene_settings *st = sm_scene_get_settings(sc);
     run_outputs o;
+    o.manifest.start = *manifest;
+    o.progress.out_dir = out;
     o.ckpt.every = a->ckpt_every;
     o.ckpt.keep = a->keep;
     o.ckpt.scene_hash = hash;
@@ -182,6 +225,7 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
     sm_status s = sm_run_frames(&cfg, o.sinks, o.nsinks, &res, err, sizeof err);
     *stopped = res.stopped ? (int)cli_stop : 0;
     if (s != SM_OK) fprintf(stderr, "sandmpm run: %s\n", err);
+    if (s == SM_ERR_NUMERICAL) say_what_to_change();
     if (*stopped)
         fprintf(stderr, "sandmpm run: stopped by %s after frame %d (t = %.6g s)\n", cli_signal_name(*stopped),
                 res.frames_written - 1, (res.frames_written - 1) / st->fps);
@@ -290,6 +334,18 @@ static sm_status resume_world(const run_args *a, sm_world *w, const char *out, u
     return SM_ERR_IO;
 }
 
+/* The run manifest's description of this run, before any frame (app/run_manifest.h). */
+static void describe_run(const run_args *a, const sm_scene_settings *set, uint64_t hash, int nframes, sm_run_manifest *m) {
+    sm_run_manifest_init(m);
+    snprintf(m->scene, sizeof m->scene, "%s", a->so.scene ? a->so.scene : "(built in) scenes/default.lua");
+    m->scene_hash = hash;
+    snprintf(m->quality, sizeof m->quality, "%s", a->so.quality ? a->so.quality : "preview");
+    m->fps = set->fps;
+    m->frames = nframes;
+    m->files = SM_RUNFILE_RENDER | SM_RUNFILE_POSES | SM_RUNFILE_CHECKPOINTS | (set->out_vtk ? SM_RUNFILE_PVD : 0u) |
+               (set->out_csv ? SM_RUNFILE_CSV : 0u) | (a->video ? SM_RUNFILE_VIDEO : 0u);
+}
+
 static int run_command(int argc, char **argv) {
     if (cli_help_requested(argc, argv)) {
         cli_usage_run(stdout);
@@ -317,10 +373,14 @@ static int run_command(int argc, char **argv) {
     const uint64_t hash = scene_hash(&a.so);
     if (a.ckpt_every < 0) a.ckpt_every = set->checkpoint_every >= 0 ? set->checkpoint_every : CLI_CHECKPOINT_EVERY;
     int first = 0;
+    sm_run_manifest manifest;
+    describe_run(&a, set, hash, nframes, &manifest);
+    const cli_claim claim = {a.resume, a.overwrite};
+    if (st == SM_OK) st = cli_claim_folder(out, &claim, &manifest);
     if (st == SM_OK && a.resume) st = resume_world(&a, sm_scene_world(sc), out, hash, &first);
     if (st == SM_OK) {
         cli_signals_install();
-        st = run_frames(&a, sc, out, nframes, first, hash, &stopped);
+        st = run_frames(&a, sc, out, nframes, first, hash, &manifest, &stopped);
     }
     sm_scene_destroy(sc);
     if (stopped) return cli_exit_code_signal(stopped);

@@ -6,7 +6,8 @@
 #  - a resume with other --set values is refused (exit 2) and --force overrides it;
 #  - SIGINT writes a checkpoint of the last frame and prints the resume command;
 #  - only the last K checkpoints are kept;
-#  - diagnostics.csv, poses.csv and frames.pvd after a resume equal the uninterrupted run's.
+#  - diagnostics.csv, poses.csv, frames.pvd and run_manifest.txt after a resume equal the
+#    uninterrupted run's.
 set -u
 BIN=$1
 SRC=$2
@@ -42,10 +43,13 @@ rc=$?
 grep -q "resuming from" "$TMP/err" && ok || bad "resume did not say where from: $(cat "$TMP/err")"
 cmp -s "$TMP/a/$last" "$TMP/ref/$last" && ok || bad "resumed last frame differs from the uninterrupted run's"
 # Accumulating outputs hold every frame once, as the uninterrupted run's (the wall-time column aside).
-cmp -s <(cut -d, -f1-12 "$TMP/a/diagnostics.csv") <(cut -d, -f1-12 "$TMP/ref/diagnostics.csv") && ok ||
-    bad "diagnostics.csv after the resume differs: $(diff <(cut -d, -f1-12 "$TMP/a/diagnostics.csv") <(cut -d, -f1-12 "$TMP/ref/diagnostics.csv") | head -5)"
+cmp -s <(cut -d, -f1-20 "$TMP/a/diagnostics.csv") <(cut -d, -f1-20 "$TMP/ref/diagnostics.csv") && ok ||
+    bad "diagnostics.csv after the resume differs: $(diff <(cut -d, -f1-20 "$TMP/a/diagnostics.csv") <(cut -d, -f1-20 "$TMP/ref/diagnostics.csv") | head -5)"
 cmp -s "$TMP/a/poses.csv" "$TMP/ref/poses.csv" && ok || bad "poses.csv after the resume differs"
 cmp -s "$TMP/a/frames.pvd" "$TMP/ref/frames.pvd" && ok || bad "frames.pvd after the resume differs"
+# The run manifest lists every frame of both parts of the run, as the uninterrupted run's does.
+cmp -s <(grep -v '^file checkpoints' "$TMP/a/run_manifest.txt") <(grep -v '^file checkpoints' "$TMP/ref/run_manifest.txt") && ok ||
+    bad "run_manifest.txt after the resume differs: $(diff "$TMP/a/run_manifest.txt" "$TMP/ref/run_manifest.txt")"
 [ "$(ls "$TMP"/a/checkpoints/ckpt_*.smc | wc -l)" -eq 2 ] && ok || bad "not exactly 2 checkpoints kept"
 ls "$TMP"/a/checkpoints/.*tmp* >/dev/null 2>&1 && bad "temporaries left in checkpoints/" || ok
 
@@ -98,6 +102,7 @@ SANDMPM_TEST_NAN_AT_FRAME=10 "$BIN" run "$SCENE" --out "$TMP/n" --threads 1 --ch
 rc=$?
 [ "$rc" -eq 3 ] && ok || bad "numerical failure: exit $rc, want 3: $(cat "$TMP/err")"
 grep -q "frame 11 (from t" "$TMP/err" && grep -q "not finite\|non-finite\|NaN" "$TMP/err" && ok || bad "numerical failure: the frame and the NaN not named: $(cat "$TMP/err")"
+grep -q "a smaller max_dt" "$TMP/err" && grep -q "elastic_cfl" "$TMP/err" && ok || bad "numerical failure: the scene settings to change not named: $(cat "$TMP/err")"
 good=$(sed -n 's/.*the last good state (frame \([0-9]*\)) is in \(.*\)$/\2/p' "$TMP/err")
 [ -n "$good" ] && [ -f "$good" ] && ok || bad "no last-good checkpoint reported: $(cat "$TMP/err")"
 "$BIN" run "$SCENE" --out "$TMP/n" --threads 1 --checkpoint-every 0 --resume --force >/dev/null 2>"$TMP/err"

@@ -132,6 +132,109 @@ expect 4 "render missing dir" "$BIN" render "$TMP/no_such_run"
 mkdir -p "$TMP/corrupt" && printf 'ply\nformat binary_little_endian 1.0\nelement vertex 100\nproperty float x\nend_header\n' > "$TMP/corrupt/frame_0000.ply"
 expect 2 "render corrupt frame" "$BIN" render "$TMP/corrupt"
 
+# Output folders cannot mix runs (docs/outputs.md): run_manifest.txt names the scene, its hash and
+# the frames written; a re-run of the same scene replaces its files; another run (here the same
+# file with another --set value) is refused (exit 2, the folder untouched) unless --overwrite,
+# which removes the listed files and only those; `render` renders the listed frames only; a folder
+# without a manifest is refused by `run` and rendered whole by `render`, with a note.
+cat > "$TMP/drop.lua" <<'EOF2'
+return {
+  dim = 2, dx = 0.05, ppc = 4, frames = 2,
+  domain = { min = {0, 0}, max = {1, 1} },
+  materials = { sand = { model = "sand", friction_angle = 30 } },
+  objects = { { shape = { type = "box", center = {0.5, params.y or 0.5}, half_extent = {0.1, 0.1} }, material = "sand" } },
+}
+EOF2
+m=$TMP/mix
+drop=$TMP/drop.lua
+expect 0 "mix: first run" "$BIN" run "$drop" --out "$m"
+has "$m/run_manifest.txt" "scene $drop" "manifest: the scene"
+has "$m/run_manifest.txt" "frame_files ply 0 2" "manifest: the PLY frames"
+has "$m/run_manifest.txt" "frame_files vtp 0 2" "manifest: the VTK frames"
+has "$m/run_manifest.txt" "state complete" "manifest: the state"
+grep -qE '^scene_hash [0-9a-f]{16}$' "$m/run_manifest.txt" && ok || bad "manifest: no scene_hash: $(cat "$m/run_manifest.txt")"
+# diagnostics.csv (docs/outputs.md): units in the header; frame 0 without steps (dt empty); per-frame
+# steps add up to the running total; the mass is constant and positive; the centre of mass of the
+# box falls (y decreases); the implicit castle reports its Newton and GMRES iterations per frame, an
+# explicit run none.
+hdr="frame,time_s,steps_frame,steps_total,dt_min_s,dt_max_s,particles,total_mass_kg,com_x_m,com_y_m,com_z_m,kinetic_energy_J,elastic_energy_J,momentum_x_kg_m_s,momentum_y_kg_m_s,momentum_z_kg_m_s,max_speed_m_s,newton_iterations_frame,gmres_iterations_frame,newton_unconverged_total,wall_s_frame,wall_s_total"
+diag_check() { # csv implicit(0|1) what
+    [ "$(head -1 "$1")" = "$hdr" ] && ok || bad "$3: diagnostics.csv header: $(head -1 "$1")"
+    awk -F, -v imp="$2" 'NR == 1 { next }
+        NF != 22 { print "fields: " NF; b = 1 }
+        NR == 2 && ($1 != 0 || $3 != 0 || $5 != "" || $6 != "" || $18 != 0) { print "frame 0: " $0; b = 1 }
+        NR > 2 && ($3 <= 0 || $5 <= 0 || $6 < $5) { print "frame " $1 " steps/dt: " $0; b = 1 }
+        { sum += $3; if ($4 != sum) { print "steps_total " $4 " != sum " sum; b = 1 } }
+        NR == 2 { m = $8; y0 = $10 } !($8 > 0) || ($8 - m) * ($8 - m) > 1e-12 * m * m { print "mass " $8 " vs " m; b = 1 }
+        NR > 2 { y = $10; if (imp == 1 && !($18 > 0 && $19 >= $18)) { print "implicit: newton " $18 " gmres " $19; b = 1 }
+                 if (imp == 0 && ($18 != 0 || $19 != 0)) { print "explicit: newton " $18; b = 1 } }
+        END { if (!(y < y0)) { print "centre of mass y " y0 " -> " y; b = 1 } exit b }' "$1" > "$TMP/diag_bad" && ok ||
+        bad "$3: diagnostics.csv: $(head -3 "$TMP/diag_bad")"
+}
+diag_check "$m/diagnostics.csv" 0 "falling box (explicit)"
+diag_check "$TMP/run_castle/diagnostics.csv" 1 "castle (implicit)"
+expect 0 "mix: the same scene, shorter" "$BIN" run "$drop" --frames 1 --out "$m"
+has "$TMP/err" "replacing the earlier run of the same scene" "same scene: said so"
+[ ! -e "$m/frame_0002.ply" ] && [ ! -e "$m/frame_0002.vtp" ] && ok || bad "same scene, shorter: the old frame 2 is left"
+has "$m/run_manifest.txt" "frame_files ply 0 1" "same scene, shorter: manifest"
+rm -rf "$TMP/mix_before" && cp -a "$m" "$TMP/mix_before"
+expect 2 "mix: another run" "$BIN" run "$drop" --set y=0.6 --frames 1 --out "$m"
+has "$TMP/err" "holds frames 0..1 of another run ($drop" "another run: the other run named"
+has "$TMP/err" "--overwrite" "another run: the way out named"
+diff -r "$m" "$TMP/mix_before" >/dev/null && ok || bad "a refused run changed the folder: $(diff -r "$m" "$TMP/mix_before" | head -3)"
+expect 2 "--resume with --overwrite" "$BIN" run "$drop" --out "$m" --resume --overwrite
+echo "mine" > "$m/notes.txt"
+cp "$m/frame_0001.ply" "$m/frame_0007.ply" # not the listed run's: --overwrite keeps it
+expect 0 "mix: --overwrite" "$BIN" run "$drop" --set y=0.6 --frames 1 --out "$m" --overwrite
+has "$TMP/err" "removed 9 files" "--overwrite: the old run's 9 files (2 PLY, 2 VTK, pvd, csv, render.txt, poses.csv, manifest)"
+[ -f "$m/notes.txt" ] && [ -f "$m/frame_0007.ply" ] && ok || bad "--overwrite removed files the old run did not list"
+old_hash=$(sed -n 's/^scene_hash //p' "$TMP/mix_before/run_manifest.txt")
+new_hash=$(sed -n 's/^scene_hash //p' "$m/run_manifest.txt")
+[ -n "$new_hash" ] && [ "$new_hash" != "$old_hash" ] && ok || bad "--overwrite: the manifest's hash $new_hash (was $old_hash)"
+expect 0 "render: the listed frames" "$BIN" render "$m" --size 32x24
+[ -f "$m/frame_0001.png" ] && [ ! -e "$m/frame_0007.png" ] && ok || bad "render: rendered an unlisted frame (or not a listed one)"
+has "$m/run_manifest.txt" "frame_files png 0 1" "render: the PNG files listed"
+# render --frames: a range of the listed frames only
+rm -f "$m"/frame_*.png
+expect 0 "render --frames 1" "$BIN" render "$m" --size 32x24 --frames 1
+[ -f "$m/frame_0001.png" ] && [ ! -e "$m/frame_0000.png" ] && ok || bad "render --frames 1: $(ls "$m")"
+expect 0 "render --frames ..0" "$BIN" render "$m" --size 32x24 --frames ..0
+[ -f "$m/frame_0000.png" ] && ok || bad "render --frames ..0: no frame 0"
+expect 2 "render --frames 3..9 (none listed)" "$BIN" render "$m" --size 32x24 --frames 3..9
+has "$TMP/err" "has frames 0..1, none of them asked for" "render --frames outside the run: said so"
+expect 2 "render --frames 2..1" "$BIN" render "$m" --frames 2..1
+rm "$m/run_manifest.txt"
+expect 2 "run into frames without a manifest" "$BIN" run "$drop" --frames 1 --out "$m"
+has "$TMP/err" "but no run_manifest.txt" "no manifest: said so"
+expect 0 "render without a manifest" "$BIN" render "$m" --size 32x24
+has "$TMP/err" "note:" "render without a manifest: a note"
+[ -f "$m/frame_0007.png" ] && ok || bad "render without a manifest: not every frame rendered"
+
+# What the run says (stderr is not a terminal here: a line per frame): frame 0's line has no rate
+# or ETA yet (none is known), the end a summary line; -q says nothing on a sound run, -v a line per
+# frame with its steps and dt range; --end that is not a whole number of frames is warned about
+# (a whole one is not); --video without --render says that it renders.
+d=$TMP/talk
+expect 0 "talk: a run" "$BIN" run "$drop" --out "$d"
+grep '^frame 0/2' "$TMP/err" | grep -q 'particle-steps/s\|ETA' && bad "frame 0's line has a rate or ETA: $(grep '^frame 0/' "$TMP/err")" || ok
+has "$TMP/err" "computing frame 1" "frame 0's line says what is going on"
+grep '^frame 2/2' "$TMP/err" | grep -q 'particle-steps/s' && ok || bad "frame 2's line has no rate: $(cat "$TMP/err")"
+steps=$(tail -1 "$d/diagnostics.csv" | cut -d, -f4)
+has "$TMP/err" "sandmpm: done: 3 frames (0..2), $steps steps" "the summary: frames and steps"
+has "$TMP/err" "files in $d/ (listed in run_manifest.txt)" "the summary: where the files are"
+expect 0 "talk: -q" "$BIN" run "$drop" --out "$d" -q
+[ ! -s "$TMP/err" ] || [ "$(grep -vc 'replacing the earlier run' "$TMP/err")" -eq 0 ] && ok || bad "-q: $(cat "$TMP/err")"
+expect 0 "talk: --verbose" "$BIN" run "$drop" --out "$d" --verbose
+[ "$(grep -c '^frame [12]/2 .* steps (dt [0-9.e-]*\.\.[0-9.e-]* s)' "$TMP/err")" -eq 2 ] && ok || bad "-v: no detailed frame lines: $(cat "$TMP/err")"
+expect 2 "talk: -q -v" "$BIN" run "$drop" --out "$d" -q -v
+expect 0 "talk: --end not a whole number of frames" "$BIN" run "$drop" --out "$d" --end 0.05
+has "$TMP/err" "warning: --end 0.05 s is not a whole number of frames at 24 fps (1.2 frames); running 2 frames, to t = 0.0833333 s" "--end 0.05 warned"
+expect 0 "talk: --end a whole number of frames" "$BIN" run "$drop" --out "$d" --end 0.125
+grep -q "not a whole number" "$TMP/err" && bad "--end 0.125 (3 frames) warned: $(cat "$TMP/err")" || ok
+"$BIN" run "$drop" --out "$d" --frames 1 --video >/dev/null 2>"$TMP/err"
+has "$TMP/err" "note: --video needs the frames as pictures, so it renders them too" "--video without --render explained"
+[ -s "$d/frame_0001.png" ] && ok || bad "--video without --render: no PNG frames"
+
 # bench: `sandmpm bench --csv` in this build's precision and, if the program of the other
 # precision (sandmpm-float / sandmpm-double, CMake SM_SIBLING) is next to this one, in that one
 # too: the exact header, one row per dimension and thread count, sane fields. No timing checks.

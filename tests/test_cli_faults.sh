@@ -40,7 +40,7 @@ no_temporaries() { # dir description
     [ -z "$t" ] && ok || bad "$2: temporaries left: $t"
 }
 
-# Every file under its final name is whole: PLY size = header + 42 bytes per vertex; VTK files
+# Every file under its final name is whole: PLY size = header + 46 bytes per vertex; VTK files
 # end with </VTKFile>; CSV lines complete (13 and 9 fields, a final newline).
 whole_files() { # dir description
     local d=$1 f n h size
@@ -49,7 +49,7 @@ whole_files() { # dir description
         n=$(sed -n 's/^element vertex //p' "$f" | head -1 | tr -d '\r')
         h=$(grep -abo 'end_header' "$f" | head -1 | cut -d: -f1)
         size=$(wc -c < "$f")
-        [ -n "$n" ] && [ -n "$h" ] && [ "$size" -eq $((h + 11 + 42 * n)) ] && ok || bad "$2: $f is cut short ($size bytes)"
+        [ -n "$n" ] && [ -n "$h" ] && [ "$size" -eq $((h + 11 + 46 * n)) ] && ok || bad "$2: $f is cut short ($size bytes)"
     done
     for f in "$d"/frame_*.vtp "$d"/frames.pvd; do
         [ -e "$f" ] || continue
@@ -59,7 +59,7 @@ whole_files() { # dir description
         [ -s "$f" ] || continue
         [ -z "$(tail -c 1 "$f")" ] && ok || bad "$2: $f ends inside a line"
     done
-    [ -s "$d/diagnostics.csv" ] && { awk -F, 'NF != 13 { b = 1 } END { exit b }' "$d/diagnostics.csv" && ok || bad "$2: diagnostics.csv has a partial line"; }
+    [ -s "$d/diagnostics.csv" ] && { awk -F, 'NF != 22 { b = 1 } END { exit b }' "$d/diagnostics.csv" && ok || bad "$2: diagnostics.csv has a partial line"; }
     [ -s "$d/poses.csv" ] && { awk -F, 'NF != 9 { b = 1 } END { exit b }' "$d/poses.csv" && ok || bad "$2: poses.csv has a partial line"; }
     return 0
 }
@@ -144,6 +144,8 @@ for sig in INT TERM; do
     [ -n "$last" ] && [ "$(ls "$d" | grep -c '^frame_.*\.ply$')" -eq $((last + 1)) ] && ok ||
         bad "SIG$sig: says frame $last is the last, the folder has $(ls "$d" | grep -c '^frame_.*\.ply$') PLY frames"
     [ -n "$last" ] && [ "$(wc -l < "$d/diagnostics.csv")" -eq $((last + 2)) ] && ok || bad "SIG$sig: diagnostics.csv rows"
+    [ -n "$last" ] && grep -qx "frame_files ply 0 $last" "$d/run_manifest.txt" && grep -qx "state stopped" "$d/run_manifest.txt" &&
+        ok || bad "SIG$sig: the run manifest after frame $last: $(cat "$d/run_manifest.txt")"
 done
 d=$TMP/sig_twice # frames of 10 s (10,000 steps): the second SIGINT comes during one
 "$BIN" run "$tiny" --set fps=0.1 --frames 1000 --out "$d" >/dev/null 2>"$TMP/err" &
@@ -167,6 +169,11 @@ for i in 1 2 3; do
     kill -KILL $p
     wait $p 2>/dev/null
 done
+# the manifest lists frames that are on disk (the frame after them may be written, not yet listed)
+listed=$(sed -n 's/^frame_files ply 0 \([0-9]*\)$/\1/p' "$d/run_manifest.txt")
+ondisk=$(ls "$d" | grep -c '^frame_.*\.ply$')
+[ -n "$listed" ] && [ -f "$d/$(printf 'frame_%04d.ply' "$listed")" ] && [ "$ondisk" -le $((listed + 2)) ] && ok ||
+    bad "after SIGKILL: the manifest lists frames 0..$listed, $ondisk PLY files on disk"
 sh -c 'exit 0' & dead=$!
 wait $dead
 touch "$d/.frame_0007.ply.tmp.$dead" "$d/.frames.pvd.tmp.$dead" "$d/.frame_0008.ply.tmp.$$" "$d/frame_0009.vtp.tmp"

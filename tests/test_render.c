@@ -620,19 +620,24 @@ static void test_ply_roundtrip(int dim) {
     CHECK(f.dim == dim);
     CHECK(f.has_velocity && f.has_q && f.has_material);
     CHECK(f.volume != NULL);
-    int ok = f.n == pv.n, q_nonzero = 0, mat1 = 0;
-    for (size_t i = 0; ok && i < pv.n; i++) {
+    int ok = f.n == pv.n && f.id != NULL, q_nonzero = 0, mat1 = 0;
+    size_t *at = malloc((pv.n ? pv.n : 1) * sizeof *at); /* at[id]: storage index; frames are in id order */
+    for (size_t i = 0; at && i < pv.n; i++) ok &= pv.id[i] < pv.n && ((at[pv.id[i]] = i), 1);
+    for (size_t k = 0; ok && at && k < pv.n; k++) {
+        const size_t i = at[k];
+        ok &= f.id[k] == (uint32_t)k;
         for (int a = 0; a < 3; a++) {
             float xe = a < dim ? (float)pv.x[i * (size_t)dim + (size_t)a] : 0.0f;
             float ve = a < dim ? (float)pv.v[i * (size_t)dim + (size_t)a] : 0.0f;
-            ok &= f.x[3 * i + (size_t)a] == xe && f.v[3 * i + (size_t)a] == ve;
+            ok &= f.x[3 * k + (size_t)a] == xe && f.v[3 * k + (size_t)a] == ve;
         }
-        ok &= f.material[i] == pv.material[i];
-        ok &= f.q[i] == (float)pv.q[i];
-        ok &= f.volume[i] == (float)pv.vol0[i];
+        ok &= f.material[k] == pv.material[i];
+        ok &= f.q[k] == (float)pv.q[i];
+        ok &= f.volume[k] == (float)pv.vol0[i];
         q_nonzero += pv.q[i] != 0;
         mat1 += pv.material[i] == 1;
     }
+    free(at);
     CHECK(ok);
     CHECK(mat1 > 0);
     printf("PLY round trip %dD: %zu particles, %d with q != 0\n", dim, f.n, q_nonzero);
@@ -845,6 +850,54 @@ static void test_ply_errors(void) {
     }
 }
 
+/* The colour legend: drawn in the bottom-left quarter only (the rest of the image unchanged), with
+ * white text and the colour map's two ends (dark blue-violet to yellow) for speed; none for the
+ * sand tones; a swatch per material present. */
+static size_t white_pixels(const uint8_t *img) {
+    size_t n = 0;
+    for (size_t i = 0; i < (size_t)W * H; i++) n += img[3 * i] == 240 && img[3 * i + 1] == 240 && img[3 * i + 2] == 240;
+    return n;
+}
+
+static void test_legend(void) {
+    sm_frame f;
+    make_cube(&f, 12, 0.015);
+    sm_render_opts o = scene_opts();
+    uint8_t *a = malloc(W * H * 3), *b = malloc(W * H * 3);
+    const sm_color_mode modes[4] = {SM_COLOR_SPEED, SM_COLOR_Q, SM_COLOR_MATERIAL, SM_COLOR_SAND};
+    for (size_t i = 0; i < f.n; i++) f.material[i] = (uint16_t)(f.x[3 * i] > 0 ? 2 : 0);
+    for (int k = 0; k < 4; k++) {
+        o.color = modes[k];
+        o.legend = 0;
+        CHECK(render(&f, &o, a) == SM_OK);
+        o.legend = 1;
+        CHECK(render(&f, &o, b) == SM_OK);
+        size_t outside = 0, inside = 0, violet = 0, yellow = 0;
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                const uint8_t *p = a + 3 * ((size_t)y * W + x), *q = b + 3 * ((size_t)y * W + x);
+                const int diff = memcmp(p, q, 3) != 0;
+                if (x < W / 2 && y >= H / 2) inside += diff;
+                else outside += diff;
+                violet += diff && q[2] > q[1] + 40 && q[0] > q[1];
+                yellow += diff && q[0] > 180 && q[1] > 160 && q[2] < 100;
+            }
+        CHECK(outside == 0);
+        if (modes[k] == SM_COLOR_SAND) {
+            CHECK(inside == 0);
+            continue;
+        }
+        CHECK(inside > 200);
+        CHECK(white_pixels(b) > white_pixels(a) + 20); /* the title and the range */
+        if (modes[k] == SM_COLOR_SPEED) CHECK(violet > 0 && yellow > 0);
+        printf("legend (colour mode %d): %zu pixels in the bottom-left quarter, %zu outside it\n", (int)modes[k], inside,
+               outside);
+    }
+    free(a);
+    free(b);
+    sm_frame_free(&f);
+}
+
 int main(void) {
     snprintf(tmpdir, sizeof tmpdir, "%s/sm_test_render_XXXXXX", getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
     if (!mkdtemp(tmpdir)) {
@@ -854,6 +907,7 @@ int main(void) {
     test_scene();
     test_colliders();
     test_2d();
+    test_legend();
     test_ply_roundtrip(3);
     test_ply_roundtrip(2);
     test_ply_formats();

@@ -89,10 +89,11 @@ def measure(p, dx, ppc, axisymmetric=False):
 
 
 def read_csv(path):
-    """diagnostics.csv as a dict of numpy columns."""
+    """diagnostics.csv as a dict of numpy columns (docs/outputs.md); an empty field (dt_min_s and
+    dt_max_s of a frame without steps, frame 0) is NaN."""
     with open(path) as f:
         names = f.readline().strip().split(",")
-        rows = [list(map(float, line.split(","))) for line in f if line.strip()]
+        rows = [[float(v) if v.strip() else math.nan for v in line.split(",")] for line in f if line.strip()]
     a = np.array(rows)
     return {n: a[:, i] for i, n in enumerate(names)}
 

@@ -157,7 +157,9 @@ def run_one(binary, j, root):
     if os.path.exists(stamp) and open(stamp).read() == key:
         return j["name"], 0.0, True
     t0 = time.time()
-    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    # --overwrite (not in the key): the folder is this job's, an earlier run in it (of an edited
+    # scene, or by an older program without run_manifest.txt) is replaced
+    r = subprocess.run(cmd + ["--overwrite"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     if r.returncode != 0:
         raise RuntimeError(f"{j['name']}: exit {r.returncode}: {r.stderr[-800:]}")
     with open(stamp, "w") as f:
@@ -202,7 +204,7 @@ def analyse_collapse(j, root):
         m = deposit.measure(deposit.read_ply(os.path.join(out, f)), dx, ppc, axisymmetric=(dim == 3))
         fronts.append(m["front"])
         heights.append(m["height"])
-    t = diag["time"]
+    t = diag["time_s"]
     final = fronts[-1]
     # flow duration: first frame time the front is within 2% of its final advance (and stays)
     adv = final - size0
@@ -211,7 +213,7 @@ def analyse_collapse(j, root):
         if all(abs(final - fronts[k]) <= 0.02 * adv for k in range(i, len(fronts))):
             tstop = t[i]
             break
-    ke = diag["kinetic_energy"]
+    ke = diag["kinetic_energy_J"]
     return {
         "dim": dim, "a": a, "n": n, "ppc": ppc, "sets": s,
         "runout": (final - size0) / size0,
@@ -220,8 +222,8 @@ def analyse_collapse(j, root):
         "t_flow": float(tstop), "tau": math.sqrt(H0 / G),
         "ke_end_rel": float(ke[-1] / ke.max()) if ke.max() > 0 else 0.0,
         "series": {"t": [float(x) for x in t], "front": [f / size0 for f in fronts], "height": [h / size0 for h in heights]},
-        "wall_s": float(diag["wall_seconds"][-1]),
-        "steps": int(diag["steps"][-1]),
+        "wall_s": float(diag["wall_s_total"][-1]),
+        "steps": int(diag["steps_total"][-1]),
     }
 
 
@@ -235,8 +237,8 @@ def analyse_pile(j, root):
     ppc = s.get("ppc", 8 if dim == 3 else 4)
     ang = deposit.flank_angle(p, dx, ppc, axisymmetric=(dim == 3))
     diag = deposit.read_csv(os.path.join(out, "diagnostics.csv"))
-    return dict(ang, dim=dim, sets=s, ke_end=float(diag["kinetic_energy"][-1]),
-                wall_s=float(diag["wall_seconds"][-1]), steps=int(diag["steps"][-1]))
+    return dict(ang, dim=dim, sets=s, ke_end=float(diag["kinetic_energy_J"][-1]),
+                wall_s=float(diag["wall_s_total"][-1]), steps=int(diag["steps_total"][-1]))
 
 
 def pile_dx(s):

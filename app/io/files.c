@@ -242,7 +242,7 @@ void sm_atomic_abort(sm_atomic_file *a) {
 
 /* 1 if name (without the temporary's dot and suffix) is a file sandmpm writes atomically. */
 static int is_our_file(const char *name, size_t n) {
-    static const char *const fixed[] = {"frames.pvd", "render.txt", "video.mp4"};
+    static const char *const fixed[] = {"frames.pvd", "render.txt", "video.mp4", "run_manifest.txt"};
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
         if (n == strlen(fixed[i]) && !memcmp(name, fixed[i], n)) return 1;
     if (n < 14 || memcmp(name, "frame_", 6) != 0) return 0; /* frame_NNNN.ext */

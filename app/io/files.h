@@ -75,7 +75,7 @@ void sm_untrack_temporary(int slot);
 void sm_remove_open_temporaries(void);
 
 /* Removes from dir the temporaries of the files sandmpm writes (frame_N.ply/.vtp/.png, frames.pvd,
- * render.txt, video.mp4) left by a process that no longer runs, and the "NAME.tmp" of older
+ * render.txt, video.mp4, run_manifest.txt) left by a process that no longer runs, and the "NAME.tmp" of older
  * versions. *removed: how many; first: the first one's name. SM_OK or SM_ERR_IO. */
 sm_status sm_remove_stale_temporaries(const char *dir, int *removed, char *first, size_t firstlen, char *err,
                                       size_t errlen);

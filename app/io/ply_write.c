@@ -1,5 +1,6 @@
 /* The PLY frame writer; see ply.h. */
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "app/io/files.h"
@@ -15,8 +16,12 @@ static void put_f32(unsigned char *b, float f) {
     b[3] = (unsigned char)((u >> 24) & 0xff);
 }
 
+static void put_u32(unsigned char *b, uint32_t u) {
+    for (int k = 0; k < 4; k++) b[k] = (unsigned char)((u >> (8 * k)) & 0xff);
+}
+
 /* One vertex record, little-endian, in the header's property order. */
-#define PLY_RECORD_BYTES (4 * 6 + 2 + 4 * 4)
+#define PLY_RECORD_BYTES (4 * 6 + 2 + 4 * 4 + 4)
 static void put_record(unsigned char *rec, const sm_out_particle *r) {
     for (int a = 0; a < 3; a++) {
         put_f32(rec + 4 * a, r->x[a]);
@@ -28,14 +33,23 @@ static void put_record(unsigned char *rec, const sm_out_particle *r) {
     put_f32(rec + 30, r->friction_angle);
     put_f32(rec + 34, r->Je);
     put_f32(rec + 38, r->volume);
+    put_u32(rec + 42, r->id);
 }
 
 sm_status sm_write_ply(const sm_world *w, const char *path, char *err, size_t errlen) {
-    sm_atomic_file a;
-    sm_status st = sm_atomic_open(&a, path, err, errlen);
-    if (st != SM_OK) return st;
     sm_particles_view pv;
     sm_world_particles(w, &pv);
+    size_t *order = sm_out_id_order(&pv);
+    if (!order) {
+        snprintf(err, errlen, "%s: out of memory", path);
+        return SM_ERR_NOMEM;
+    }
+    sm_atomic_file a;
+    sm_status st = sm_atomic_open(&a, path, err, errlen);
+    if (st != SM_OK) {
+        free(order);
+        return st;
+    }
     const sm_world_def *def = sm_world_get_def(w);
     fprintf(a.f,
             "ply\nformat binary_little_endian 1.0\ncomment sandmpm %s\ncomment dim %d\n"
@@ -43,15 +57,16 @@ sm_status sm_write_ply(const sm_world *w, const char *path, char *err, size_t er
             "property float x\nproperty float y\nproperty float z\n"
             "property float vx\nproperty float vy\nproperty float vz\n"
             "property ushort material\nproperty float q\nproperty float friction_angle\nproperty float Je\n"
-            "property float volume\nend_header\n",
+            "property float volume\nproperty uint id\nend_header\n",
             sm_version(), pv.dim, def->domain_min[0], def->domain_min[1], def->domain_min[2], def->domain_max[0],
             def->domain_max[1], def->domain_max[2], pv.n);
     unsigned char rec[PLY_RECORD_BYTES];
-    for (size_t i = 0; i < pv.n && !ferror(a.f); i++) {
+    for (size_t k = 0; k < pv.n && !ferror(a.f); k++) {
         sm_out_particle r;
-        sm_out_particle_get(w, &pv, i, &r);
+        sm_out_particle_get(w, &pv, order[k], &r);
         put_record(rec, &r);
         fwrite(rec, sizeof rec, 1, a.f);
     }
+    free(order);
     return sm_atomic_commit(&a, err, errlen);
 }

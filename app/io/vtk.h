@@ -9,8 +9,8 @@
 
 /* Writes the particles as VTK XML PolyData (.vtp, raw appended little-endian, UInt64 headers),
  * atomically: points, a vertex cell per particle, and point arrays velocity, material, q,
- * friction_angle, Je, volume in that order in the appended block (then Points, connectivity,
- * offsets). Returns SM_OK, SM_ERR_NOMEM or SM_ERR_IO, with a message in err. */
+ * friction_angle, Je, volume, id (UInt32, the stable particle id) in that order in the appended
+ * block (then Points, connectivity, offsets); points in increasing id order (app/io/fields.h). Returns SM_OK, SM_ERR_NOMEM or SM_ERR_IO, with a message in err. */
 sm_status sm_write_vtp(const sm_world *w, const char *path, char *err, size_t errlen);
 
 /* Writes a ParaView collection (.pvd) atomically, listing count files (relative names) with their

@@ -9,9 +9,12 @@
 #include "app/io/fields.h"
 #include "app/io/vtk.h"
 
-/* The arrays of a frame, in float (and Int64 cells), gathered before writing. */
+/* The arrays of a frame, in float (and Int64 cells), gathered before writing, in id order
+ * (app/io/fields.h). */
 typedef struct vtp_arrays {
     float *xyz, *vel, *q, *phi, *je, *vol;
+    uint16_t *material;
+    uint32_t *id;
     int64_t *conn, *offs;
 } vtp_arrays;
 
@@ -22,6 +25,8 @@ static void arrays_free(vtp_arrays *a) {
     free(a->phi);
     free(a->je);
     free(a->vol);
+    free(a->material);
+    free(a->id);
     free(a->conn);
     free(a->offs);
 }
@@ -34,21 +39,31 @@ static int arrays_fill(vtp_arrays *a, const sm_world *w, const sm_particles_view
     a->phi = malloc(m * sizeof(float));
     a->je = malloc(m * sizeof(float));
     a->vol = malloc(m * sizeof(float));
+    a->material = malloc(m * sizeof(uint16_t));
+    a->id = malloc(m * sizeof(uint32_t));
     a->conn = malloc(m * sizeof(int64_t));
     a->offs = malloc(m * sizeof(int64_t));
-    if (!a->xyz || !a->vel || !a->q || !a->phi || !a->je || !a->vol || !a->conn || !a->offs) return 0;
+    size_t *order = sm_out_id_order(pv);
+    if (!a->xyz || !a->vel || !a->q || !a->phi || !a->je || !a->vol || !a->material || !a->id || !a->conn ||
+        !a->offs || !order) {
+        free(order);
+        return 0;
+    }
     for (size_t i = 0; i < n; i++) {
         sm_out_particle r;
-        sm_out_particle_get(w, pv, i, &r);
+        sm_out_particle_get(w, pv, order[i], &r);
         memcpy(a->xyz + 3 * i, r.x, sizeof r.x);
         memcpy(a->vel + 3 * i, r.v, sizeof r.v);
         a->q[i] = r.q;
         a->phi[i] = r.friction_angle;
         a->je[i] = r.Je;
         a->vol[i] = r.volume;
+        a->material[i] = r.material;
+        a->id[i] = r.id;
         a->conn[i] = (int64_t)i;
         a->offs[i] = (int64_t)i + 1;
     }
+    free(order);
     return 1;
 }
 
@@ -64,7 +79,7 @@ static void array_line(FILE *f, const char *type, const char *name, int comps, u
     *off += 8 + bytes;
 }
 
-static void write_vtp(FILE *f, const vtp_arrays *a, const uint16_t *material, size_t n) {
+static void write_vtp(FILE *f, const vtp_arrays *a, size_t n) {
     const uint64_t b3 = 12 * (uint64_t)n, b1 = 4 * (uint64_t)n, b2 = 2 * (uint64_t)n, b8 = 8 * (uint64_t)n;
     uint64_t off = 0;
     fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
@@ -76,6 +91,7 @@ static void write_vtp(FILE *f, const vtp_arrays *a, const uint16_t *material, si
     array_line(f, "Float32", "friction_angle", 1, &off, b1);
     array_line(f, "Float32", "Je", 1, &off, b1);
     array_line(f, "Float32", "volume", 1, &off, b1);
+    array_line(f, "UInt32", "id", 1, &off, b1);
     fprintf(f, "</PointData>\n<Points>\n");
     array_line(f, "Float32", "Points", 3, &off, b3);
     fprintf(f, "</Points>\n<Verts>\n");
@@ -83,11 +99,12 @@ static void write_vtp(FILE *f, const vtp_arrays *a, const uint16_t *material, si
     array_line(f, "Int64", "offsets", 1, &off, b8);
     fprintf(f, "</Verts>\n</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_");
     write_block(f, a->vel, b3);
-    write_block(f, material, b2);
+    write_block(f, a->material, b2);
     write_block(f, a->q, b1);
     write_block(f, a->phi, b1);
     write_block(f, a->je, b1);
     write_block(f, a->vol, b1);
+    write_block(f, a->id, b1);
     write_block(f, a->xyz, b3);
     write_block(f, a->conn, b8);
     write_block(f, a->offs, b8);
@@ -107,7 +124,7 @@ sm_status sm_write_vtp(const sm_world *w, const char *path, char *err, size_t er
     sm_atomic_file a;
     if (st == SM_OK) st = sm_atomic_open(&a, path, err, errlen);
     if (st == SM_OK) {
-        write_vtp(a.f, &arr, pv.material, pv.n);
+        write_vtp(a.f, &arr, pv.n);
         st = sm_atomic_commit(&a, err, errlen);
     }
     arrays_free(&arr);

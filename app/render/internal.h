@@ -3,6 +3,7 @@
  *   colliders.c  colliders in world space, their signed distance, sphere tracing, their shadow map;
  *   splat.c      particles projected onto a view and splatted into a z-buffer by bands of rows;
  *   shade.c      colours (tones, palettes, colour maps, sRGB), shadows, per-pixel shading 2D and 3D;
+ *   legend.c     the colour legend drawn over the image;
  *   render.c     options, validation, the scene box and radii, and sm_render putting them together.
  * Not a public header: app/render.h is. */
 #ifndef SM_APP_RENDER_INTERNAL_H
@@ -117,6 +118,12 @@ typedef struct rctx {
 } rctx;
 
 static inline float prad(const rctx *R, size_t i) { return R->rad ? R->rad[i] : R->rconst; }
+
+/* ------------------------------------------------------------------------------------------ */
+/* legend.c                                                                                     */
+
+/* Draws the colour legend of R's colour mode into the shaded image. */
+void render_draw_legend(const rctx *R, uint8_t *rgb);
 
 /* ------------------------------------------------------------------------------------------ */
 /* camera.c                                                                                     */

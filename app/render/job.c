@@ -34,6 +34,7 @@ sm_status sm_render_job_open(sm_render_job *j, const char *dir, int width, int h
     j->o.width = width;
     j->o.height = height;
     j->o.color = color;
+    j->o.legend = color != SM_COLOR_SAND; /* a colour that means something says what */
     j->o.threads = threads;
     sm_status st = sm_manifest_read(dir, &j->m, err, errlen);
     if (st != SM_OK && st != SM_ERR_IO) return st; /* SM_ERR_IO: no manifest */

@@ -360,6 +360,7 @@ OMP(omp parallel for schedule(static) num_threads(R->threads))
     }
     if (f->dim == 3) render_shade_3d(R, rgb);
     else render_shade_2d(R, rgb);
+    if (R->o->legend) render_draw_legend(R, rgb);
     return SM_OK;
 }
 

@@ -6,7 +6,8 @@
 For each frame_NNNN.ply: the particle count, the pile's height and radius (about its mean x, z), the mean speed, and the
 mean friction angle (it grows with the hardening state q, thesis 3.79). read_ply() returns a NumPy
 structured array with the PLY's properties (x, y, z, vx, vy, vz, material, q, friction_angle,
-Je, volume) and the header's comments. (Needs only NumPy; the package is not used.)
+Je, volume, id; vertices in id order, so row k is the same grain in every frame) and the header's
+comments. (Needs only NumPy; the package is not used.)
 """
 import glob
 import os

@@ -1,6 +1,6 @@
 """Runs inside Blender (background): imports a run folder with tools/blender/sandmpm_import.py and
 checks the point cloud against the PLY files: vertex count, every attribute, y-up -> z-up, a frame
-change loading the next frame, the sphere modifier. Exit status 1 on the first failure.
+change loading the next frame, stable ids (vertex k is id k), the sphere modifier. Exit status 1 on the first failure.
     blender --background --factory-startup --python tests/blender/check_import.py -- OUT_DIR"""
 import os
 import sys
@@ -51,6 +51,10 @@ check(len(pos1) != len(pos) or not np.allclose(pos1, pos), "frame 1 differs from
 v = np.empty(len(pos1) * 3, dtype=np.float32)
 obj.data.attributes["velocity"].data.foreach_get("vector", v)
 check(np.allclose(v.reshape(-1, 3)[:, 2], f1["vy"], atol=1e-6), "velocity attribute of frame 1, z up")
+# stable ids: vertex k is the grain with id k in every frame (no emitter in the default scene)
+ids = np.empty(len(pos1), dtype=np.int32)
+obj.data.attributes["id"].data.foreach_get("value", ids)
+check("id" in f0 and np.array_equal(ids, np.arange(len(pos1))), "the id attribute of frame 1 is the vertex index")
 dg = bpy.context.evaluated_depsgraph_get()
 spheres = sum(1 for i in dg.object_instances if i.is_instance and i.parent and i.parent.original == obj)
 check(spheres == len(pos1), f"{spheres} sphere instances, one per particle")

@@ -91,3 +91,13 @@ def test_frame_order(tmp_path):
     (tmp_path / "frame_x.ply").write_text("ignored")
     assert [os.path.basename(f) for f in si.frame_files(str(tmp_path))] == [
         "frame_0000.ply", "frame_0002.ply", "frame_0010.ply"]
+
+
+def test_frames_the_manifest_lists(tmp_path):
+    for n in (0, 1, 2, 5):
+        write_ply(tmp_path / f"frame_{n:04d}.ply", "ascii")
+    (tmp_path / "run_manifest.txt").write_text("sandmpm-run 1\nscene x.lua\nstate complete\nframe_files ply 0 2\n"
+                                               "frame_files vtp 0 2\n")
+    # frame_0005.ply is not the listed run's: left out
+    assert [os.path.basename(f) for f in si.frame_files(str(tmp_path))] == [
+        "frame_0000.ply", "frame_0001.ply", "frame_0002.ply"]

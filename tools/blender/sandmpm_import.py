@@ -3,7 +3,8 @@
 What it builds (Blender 3.4, its own Python API; no other module than NumPy, which Blender ships):
   - one mesh object "sandmpm: FOLDER" whose vertices are the particles of the frame shown: on every
     frame change the matching frame file is read (the scene's frame_start shows frame_0000.ply,
-    each later frame the next file, clamped to the last one) and the mesh is rebuilt, so runs whose
+    each later frame the next file, clamped to the last one; the frames the folder's
+    run_manifest.txt lists, or every frame_NNNN.ply of a folder without one) and the mesh is rebuilt, so runs whose
     particle count grows (emitters) work as well;
   - every per-particle property of the PLY file as a named point attribute: velocity (vector, the
     file's vx vy vz), q, material, friction_angle, Je, volume, id when the file has it, and radius
@@ -121,8 +122,28 @@ def read_ply(path):
     raise PlyError(f"{path}: no vertex element")
 
 
+def manifest_frames(folder):
+    """(first, last) of the PLY frames that the folder's run_manifest.txt lists (docs/outputs.md),
+    or None if the folder has no manifest or it lists no PLY frames."""
+    try:
+        with open(os.path.join(folder, "run_manifest.txt")) as f:
+            lines = f.read().splitlines()
+    except OSError:
+        return None
+    for line in lines[1:] if lines and lines[0] == "sandmpm-run 1" else []:
+        w = line.split()
+        if len(w) == 4 and w[0] == "frame_files" and w[1] == "ply":
+            return int(w[2]), int(w[3])
+    return None
+
+
 def frame_files(folder):
-    """The run's frame files in frame order: frame_NNNN.ply."""
+    """The run's frame files in frame order: those its run_manifest.txt lists (so that files of
+    another run in the folder are not mixed in), or every frame_NNNN.ply of a folder without one."""
+    listed = manifest_frames(folder)
+    if listed:
+        names = [f"frame_{k:04d}.ply" for k in range(listed[0], listed[1] + 1)]
+        return [os.path.join(folder, n) for n in names if os.path.exists(os.path.join(folder, n))]
     names = [n for n in os.listdir(folder) if re.fullmatch(r"frame_\d+\.ply", n)]
     if not names:
         raise PlyError(f"{folder}: no frame_NNNN.ply files (is this a `sandmpm run --out` folder?)")

@@ -144,10 +144,11 @@ def rake():
 
 
 def bowl():
-    # Outer radius 0.2 m, wall 1.5 cm, rim at z = 0, a flat foot of radius 6 cm 1 cm below the
+    # Outer radius 0.2 m, wall 3 cm (3 cells at dx = 1 cm: a wall thinner than about 2 dx lets the
+    # grid leak), rim at z = 0, a flat foot of radius 6 cm 1 cm below the
     # outer sphere. The profile (r, z) runs: foot, outer arc up to the rim, inner arc down to the
     # axis (angle phi from the bottom: r = rho sin phi, z = -rho cos phi).
-    Ro, t, rf, n = 0.2, 0.015, 0.06, 48
+    Ro, t, rf, n = 0.2, 0.03, 0.06, 48
     foot = -Ro - 0.01
     p0 = math.asin(rf / Ro)
     prof = [(0.0, foot), (rf, foot)]
@@ -169,5 +170,5 @@ def plough():
 if __name__ == "__main__":
     shovel().write("shovel.obj", "shovel: curved 6 mm blade 0.26 x 0.3 m, 1 m shaft")
     rake().write("rake.obj", "rake: 0.5 m bar, ten 8 cm tines, 1 m handle")
-    bowl().write("bowl.obj", "bowl: outer radius 0.2 m, 1.5 cm wall, rim at z = 0")
+    bowl().write("bowl.obj", "bowl: outer radius 0.2 m, 3 cm wall, rim at z = 0")
     plough().write("plough.obj", "plough: wedge share and curved mouldboard, 0.5 m long")

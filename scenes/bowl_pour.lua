@@ -2,7 +2,7 @@
 -- scenes/meshes/bowl.obj (outer radius 0.2 m, 3 cm wall, a flat foot), which stands on a sticky
 -- floor; the sand heaps in the bowl and, once the heap reaches the rim, spills over it. The file
 -- has the rim at z = 0 and the foot at z = -0.21 m: turned by -90 degrees about x the bowl opens
--- upwards; `position` places the centre of its bounding box. Sand: rho 2200, E 3.537e5, nu 0.3,
+-- upwards with the rim at `position` (the file's origin) and the foot 0.21 m below it, on the floor. Sand: rho 2200, E 3.537e5, nu 0.3,
 -- friction angle 32 degrees; bowl: sticky (a rough glaze).
 local q = params.quality
 local dx = ({paper = 0.004, preview = 0.01, test = 0.025})[q]
@@ -18,7 +18,7 @@ return {
   },
   colliders = {
     { shape = { type = "halfspace", point = {0, 0.02, 0}, normal = {0, 1, 0} }, mode = "sticky" },
-    { shape = { type = "mesh", file = "meshes/bowl.obj", axis_angle = {1, 0, 0, -90}, position = {0, 0.02 + 0.105, 0} },
+    { shape = { type = "mesh", file = "meshes/bowl.obj", axis_angle = {1, 0, 0, -90}, position = {0, 0.02 + 0.21, 0} },
       mode = "sticky" },
   },
   camera = { eye = {0.55, 0.55, 0.55}, target = {0, 0.12, 0}, up = {0, 1, 0}, fov = 40 },

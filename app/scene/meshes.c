@@ -6,9 +6,9 @@
  *
  * The parser records what the table says (sc_parse_mesh_shape); after validation sc_build_meshes
  * loads each file (relative paths from the scene file's folder) with placement
- * x' = R (scale (unit x)) (position is the shape's centre), moves the mesh so that its bounding
- * box is centred on the mesh frame's origin (the shape's centre is then position + that centre,
- * so a field does not depend on where the mesh is put), and builds the signed distance field with
+ * x' = R (scale (unit x)) + position, but builds the field of the mesh moved so that its bounding
+ * box is centred on the field's origin (the shape's centre is then position + that centre, so a
+ * field is as small as it can be and does not depend on where the mesh is put), and builds the signed distance field with
  * spacing dx / resolution and half width band dx -- or reads it back from
  * <scene dir>/.sandmpm-cache/<mesh hash>-<spacing>-<band>-<sign>.sdf (SANDMPM_MESH_CACHE names
  * another folder; an empty value turns the cache off). Shapes of the same geometry share one field.

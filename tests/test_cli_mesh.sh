@@ -97,5 +97,19 @@ parts=$(sed -n 's/^particles *\([0-9]*\) .*/\1/p' "$TMP/out")
 expect 0 "run mesh scene" "$BIN" run "$TMP/bowl.lua" --out "$TMP/run_bowl" --quality test --frames 1
 ls "$TMP/run_bowl" >/dev/null 2>&1 && ok || bad "run mesh scene: no output"
 
+# 2D: the z = 0 slice of the bowl turned out of the plane (a 3D rotation is allowed for a mesh)
+cat >"$TMP/bowl2d.lua" <<LUA
+return {
+  dim = 2, dx = 0.01, frames = 1,
+  domain = { min = {0, 0}, max = {0.6, 0.45} },
+  materials = { sand = { density = 2200, E = 3.537e5, nu = 0.3, friction_angle = 30 } },
+  objects = { { shape = { type = "box", center = {0.3, 0.16}, size = {0.06, 0.06} } } },
+  colliders = { { shape = { type = "mesh", file = "bowl.obj", axis_angle = {1, 0, 0, -90}, position = {0.3, 0.25} },
+                  mode = "slip" } },
+}
+LUA
+expect 0 "info 2D mesh scene" "$BIN" info "$TMP/bowl2d.lua"
+has "$TMP/out" "mesh         colliders[1].shape: bowl.obj: 147 segments; field" "info: 2D outline"
+
 echo "test_cli_mesh: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -81,7 +81,7 @@ void sc_parse_mesh_shape(vctx *v, int t, sm_shape *s) {
         for (int a = 0; a < sc->def.dim; a++) m.scale[a] = sc3[a];
     }
     sc_quat_identity(m.rotation);
-    sc_rotation_fields(v, t, m.rotation);
+    sc_rotation_fields_any(v, t, m.rotation); /* 2D: any rotation, to choose the z = 0 slice */
     sc_vec_field(v, t, "position", m.position);
     m.sign = sc_enum_field(v, t, "sign", sign_names, 3, 0) - 1;
     m.resolution = sc_num_field(v, t, "resolution", 1.0, NULL, 0.25, 1, 8.0, 1);

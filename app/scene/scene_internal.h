@@ -223,6 +223,7 @@ const char *sc_vec_label(int dim);
 int sc_vec_field(vctx *v, int t, const char *key, double out[3]);
 int sc_angvel_field(vctx *v, int t, const char *key, double out[3]);
 int sc_rotation_fields(vctx *v, int t, double q[4]);
+int sc_rotation_fields_any(vctx *v, int t, double q[4]); /* also out of the plane in 2D (a mesh's placement) */
 int sc_table_field(vctx *v, int t, const char *key);
 void sc_require_table_top(vctx *v);
 void sc_require(vctx *v, int present, const char *key, const char *what);

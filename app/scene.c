@@ -21,7 +21,10 @@
  *   shape = { type = "box", center, half_extent | size, rotation | axis_angle }
  *         | { type = "sphere", center, radius }
  *         | { type = "cylinder", center, radius, half_height | height, rotation | axis_angle }
- *         | { type = "halfspace", point | center, normal }       each may have inside_out = true
+ *         | { type = "halfspace", point | center, normal }
+ *         | { type = "mesh", file (required), unit, scale, rotation | axis_angle, position,
+ *             sign = "auto" | "winding" | "one_sided", resolution, band }   (app/scene/meshes.c)
+ *                                                                 each may have inside_out = true
  *     rotation = {w, x, y, z} (unit quaternion), axis_angle = {ax, ay, az, degrees}
  *   objects = { { shape (required), material (required unless there is one material), velocity,
  *                 angular_velocity, ppc, sampling = "jittered" | "poisson", clip = shape, seed }, ... }
@@ -215,6 +218,7 @@ sm_status sm_scene_load(const char *path, const char *source, const sm_scene_par
         st = read_file(s, path, err, errlen);
     }
     if (st == SM_OK) st = run_scene(s, name, err, errlen);
+    if (st == SM_OK) st = sc_build_meshes(s, err, errlen);
     if (st == SM_OK) st = sc_finish_load(s, err, errlen);
     if (st != SM_OK) {
         sm_scene_destroy(s);
@@ -253,6 +257,7 @@ void sm_scene_destroy(sm_scene *s) {
     for (int i = 0; i < s->ncol; i++) free(s->cols[i].kf);
     free(s->cols);
     free(s->emits);
+    sc_free_meshes(s);
     for (int i = 0; i < s->nparams; i++) {
         free(s->params[i].key);
         free(s->params[i].value);

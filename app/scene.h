@@ -79,6 +79,21 @@ const sm_world_def *sm_scene_world_def(const sm_scene *s);
 int sm_scene_material_count(const sm_scene *s);
 const char *sm_scene_material_name(const sm_scene *s, int id); /* NULL if id is out of range */
 
+/* Mesh shapes (type = "mesh"), in the order of the scene file: where, which file, its field. */
+typedef struct sm_scene_mesh_info {
+    const char *key;                  /* "colliders[1].shape", "objects[2].clip", ... */
+    const char *file;                 /* as written in the scene */
+    size_t triangles;                 /* elements of the loaded mesh (segments in 2D) */
+    const sm_mesh_field_stats *field; /* the field's statistics */
+    const char *sign;                 /* "winding" or "one_sided" (after sign = "auto") */
+    const char *source;               /* "built", "cache" (read from the cache file) or "shared" (an earlier shape's) */
+    double seconds;                   /* load and build (or read) time, s */
+} sm_scene_mesh_info;
+
+int sm_scene_mesh_count(const sm_scene *s);
+/* 0 if i is out of range. */
+int sm_scene_mesh(const sm_scene *s, int i, sm_scene_mesh_info *out);
+
 /* Creates the world, materials, colliders, objects (seeded) and emitters. Returns SM_OK,
  * SM_ERR_INVALID (an object that seeds nothing, a library error, a motion function failing at
  * t = 0; message in err) or SM_ERR_NOMEM. Once only. */

@@ -16,6 +16,16 @@ static void print_settings(const cli_scene_opts *so, const sm_scene *sc) {
     printf("frames       %d at %g fps (end time %g s)\n", st->frames, st->fps, st->end_time);
     printf("estimate     %zu particles seeded, %zu emitted; memory %.3f GB (machine %.1f GB)\n", st->estimated_particles,
            st->estimated_emitted, (double)st->estimated_bytes / 1e9, cli_machine_bytes() / 1e9);
+    for (int i = 0; i < sm_scene_mesh_count(sc); i++) {
+        sm_scene_mesh_info m;
+        if (!sm_scene_mesh(sc, i, &m)) continue;
+        const sm_mesh_field_stats *f = m.field;
+        printf("mesh         %s: %s: %zu %s; field %zu bricks, %.3f MB, spacing %g m, band %g m, %s%s; %s in %.3f s\n",
+               m.key, m.file, m.triangles, f->dim == 3 ? "triangles" : "segments", f->bricks, (double)f->bytes / 1e6,
+               f->spacing, f->band, m.sign, f->container ? " (container)" : "",
+               !strcmp(m.source, "built") ? "built" : !strcmp(m.source, "cache") ? "read from the cache" : "shared",
+               m.seconds);
+    }
 }
 
 /* What the built world holds. */

@@ -13,6 +13,7 @@ SRC=$2
 PART=${3:-all}
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
+export SANDMPM_MESH_CACHE="$TMP/mesh-cache" # the mesh scenes' fields, not into the source tree
 pass=0
 fail=0
 ok() { pass=$((pass + 1)); }

@@ -352,7 +352,7 @@ static const bad_case bad[] = {
     {"return { dx = 0.1,\n" OK3 OBJ "}\n", {"objects[1].material: required, and the scene defines no materials"}},
     {"return { dx = 0.1,\n" OK3 MAT "  objects = { shape = { type = 'sphere' } } }\n", {"objects: expected a list of objects", "found key \"shape\""}},
     {"return { dx = 0.1,\n" OK3 MAT "  objects = { { shape = { type = 'cube', center = {0.5, 0.5, 0.5} } } } }\n",
-     {"objects[1].shape.type: expected \"box\", \"sphere\", \"cylinder\" or \"halfspace\", got \"cube\""}},
+     {"objects[1].shape.type: expected \"box\", \"sphere\", \"cylinder\", \"halfspace\" or \"mesh\", got \"cube\""}},
     {"return { dx = 0.1,\n" OK3 MAT "  objects = { { shape = { type = 'sphere', center = {0.5, 0.5, 0.5}, radius = 0.1, half_extent = {1, 1, 1} } } } }\n",
      {"objects[1].shape.half_extent: unknown key (a sphere takes: type, center, radius, inside_out)"}},
     {"return { dx = 0.1,\n" OK3 MAT "  objects = { { shape = { type = 'box', center = {0.5, 0.5, 0.5}, size = {0.1, 0, 0.1} } } } }\n",
@@ -1092,7 +1092,7 @@ static void test_lines(void) {
          "bad.lua:6: objects[2].shape.center: expected {x, y, z}: 3 numbers, got 2"},
         {"return { dx = 0.1,\n" OK3 MAT "  objects = {\n    { shape = { type = 'sphere', center = {0.5, 0.5, 0.5}, radius = 0.1 } },\n"
          "    { shape = { type = 'plane', point = {0, 0.5, 0}, normal = {0, 1, 0} } } } }\n",
-         "bad.lua:6: objects[2].shape.type: expected \"box\", \"sphere\", \"cylinder\" or \"halfspace\", got \"plane\" (did "
+         "bad.lua:6: objects[2].shape.type: expected \"box\", \"sphere\", \"cylinder\", \"halfspace\" or \"mesh\", got \"plane\" (did "
          "you mean \"halfspace\"?)"},
         {"return { dx = 0.1,\n" OK3 MAT "  objects = {\n    { shape = { type = 'sphere', center = {0.5, 0.5, 0.5}, radius = 0.1 } },\n"
          "    { shape = { type = 'sphere', center = {5, 0.5, 0.5}, radius = 0.1 } } } }\n",
@@ -1101,7 +1101,7 @@ static void test_lines(void) {
          "return { dx = 0.1,\n" OK3 MAT OBJ "  colliders = { ground } }\n",
          "bad.lua:2: colliders[1].mode: expected \"sticky\", \"slip\" or \"separate\", got \"stiky\" (did you mean \"sticky\"?)"},
         {"return { dx = 0.1,\n" OK3 MAT "  objects = {\n    { shape = { type = 'cube', center = {0.5, 0.5, 0.5}, size = {1, 1, 1} } } } }\n",
-         "bad.lua:5: objects[1].shape.type: expected \"box\", \"sphere\", \"cylinder\" or \"halfspace\", got \"cube\" (did you "
+         "bad.lua:5: objects[1].shape.type: expected \"box\", \"sphere\", \"cylinder\", \"halfspace\" or \"mesh\", got \"cube\" (did you "
          "mean \"box\"?)"},
         {"return { dx = 0.1,\n" OK3 MAT OBJ "  emitters = {\n    { shape = { type = 'sphere', center = {0.5, 8, 0.5}, radius = 0.05 },\n"
          "      rate = 1 } } }\n",

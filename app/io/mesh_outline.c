@@ -24,9 +24,9 @@ static void slice_triangle(const double *v, const uint32_t *t, double *pts, size
     const double *p[3] = {v + 3 * (size_t)t[0], v + 3 * (size_t)t[1], v + 3 * (size_t)t[2]};
     int above = (p[0][2] >= 0) + (p[1][2] >= 0) + (p[2][2] >= 0);
     if (above == 0 || above == 3) return;
-    double cross[2][2];
+    double cross[2][2] = {{0, 0}, {0, 0}};
     int n = 0;
-    for (int e = 0; e < 3; e++) {
+    for (int e = 0; e < 3 && n < 2; e++) { /* exactly two edges cross the plane */
         const double *a = p[e], *b = p[(e + 1) % 3];
         if ((a[2] >= 0) == (b[2] >= 0)) continue;
         const double *u = a[2] < 0 ? a : b, *w = a[2] < 0 ? b : a;

@@ -169,6 +169,14 @@ static int shape_extent(const sm_shape *ws, const double Rw[9], double ext[3]) {
             for (int j = 0; j < 3; j++) ext[i] += fabs(Rw[3 * i + j]) * h[j];
         break;
     }
+    case SM_SHAPE_MESH: { /* a ball about the mesh frame's origin holding the field's box */
+        const sm_mesh_field_stats *st = sm_mesh_field_get_stats(ws->mesh);
+        double r2 = 0;
+        for (int k = 0; k < 3; k++) r2 += fmax(fabs(st->lo[k]), fabs(st->hi[k])) * fmax(fabs(st->lo[k]), fabs(st->hi[k]));
+        ext[0] = ext[1] = ext[2] = sqrt(r2);
+        if (st->container) finite_shape = 0;
+        break;
+    }
     }
     return finite_shape;
 }

@@ -13,7 +13,7 @@
 
 #include "app/scene/scene_internal.h"
 
-static const char *const shape_types[] = {"box", "sphere", "cylinder", "halfspace"};
+static const char *const shape_types[] = {"box", "sphere", "cylinder", "halfspace", "mesh"};
 static const char *const keys_box[] = {"type", "center", "half_extent", "size", "rotation", "axis_angle", "inside_out"};
 static const char *const keys_sphere[] = {"type", "center", "radius", "inside_out"};
 static const char *const keys_cyl[] = {"type", "center", "radius", "half_height", "height", "rotation", "axis_angle",
@@ -90,9 +90,10 @@ static void parse_shape(vctx *v, sm_shape *out) {
     int t = lua_gettop(L);
     int ty = sc_get(v, t, "type");
     lua_pop(L, 1);
-    sc_require(v, ty != LUA_TNIL, "type", "(\"box\", \"sphere\", \"cylinder\" or \"halfspace\")");
-    int kind = sc_enum_field(v, t, "type", shape_types, 4, 0);
-    static const sm_shape_kind kinds[] = {SM_SHAPE_BOX, SM_SHAPE_SPHERE, SM_SHAPE_CYLINDER, SM_SHAPE_HALFSPACE};
+    sc_require(v, ty != LUA_TNIL, "type", "(\"box\", \"sphere\", \"cylinder\", \"halfspace\" or \"mesh\")");
+    int kind = sc_enum_field(v, t, "type", shape_types, 5, 0);
+    static const sm_shape_kind kinds[] = {SM_SHAPE_BOX, SM_SHAPE_SPHERE, SM_SHAPE_CYLINDER, SM_SHAPE_HALFSPACE,
+                                          SM_SHAPE_MESH};
     sm_shape s = sm_shape_default(kinds[kind]);
     int has, as_size = 0, as_height = 0;
     switch (s.kind) {
@@ -105,9 +106,10 @@ static void parse_shape(vctx *v, sm_shape *out) {
         break;
     case SM_SHAPE_CYLINDER: as_height = parse_cylinder(v, t, &s); break;
     case SM_SHAPE_HALFSPACE: parse_halfspace(v, t, &s); break;
+    case SM_SHAPE_MESH: sc_parse_mesh_shape(v, t, &s); break; /* its field comes after validation */
     }
     s.inside_out = sc_bool_field(v, t, "inside_out", 0);
-    check_shape_limits(v, &s, as_size, as_height);
+    if (s.kind != SM_SHAPE_MESH) check_shape_limits(v, &s, as_size, as_height);
     *out = s;
 }
 
@@ -446,7 +448,13 @@ void sc_parse_collider(vctx *v, int t, int i, void *item, void *ctx) {
     d->mode = modes[sc_enum_field(v, t, "mode", sc_mode_names, 3, 0)];
     d->friction = sc_num_field(v, t, "friction", 0, NULL, SC_NOLIM);
     char msg[256];
-    if (sm_collider_def_check(d, v->s->def.dim, msg, sizeof msg) != SM_OK) {
+    sm_collider_def chk = *d; /* mesh shapes have no field yet: checked as a unit sphere in their place */
+    for (int k = 0; k < chk.shape_count; k++)
+        if (chk.shapes[k].kind == SM_SHAPE_MESH) {
+            chk.shapes[k] = sm_shape_default(SM_SHAPE_SPHERE);
+            chk.shapes[k].radius = 1;
+        }
+    if (sm_collider_def_check(&chk, v->s->def.dim, msg, sizeof msg) != SM_OK) {
         static const char *const map[] = {"friction", "friction", "shapes", "shapes", "mode", "mode", NULL};
         sc_fail_library(v, strncmp(msg, "collider ", 9) ? msg : msg + 9, map);
     }

@@ -19,6 +19,8 @@
  *                             --set keys, particle and memory estimates against available memory,
  *                             time steps against SCENE_MAX_STEPS
  *   app/scene/volume.c        exact volumes of shapes inside a box (sampling where exact is impractical)
+ *   app/scene/meshes.c        mesh shapes: files loaded (app/io/mesh_load.c), fields built or read
+ *                             from the cache, put into their shapes
  *   app/scene/build.c         sm_scene_build: the world from the validated scene
  *
  * Functions shared between these files start with sc_ (the application is one static library:
@@ -27,6 +29,7 @@
 #define SM_APP_SCENE_INTERNAL_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include <lua5.4/lua.h>
 
@@ -68,6 +71,24 @@ typedef struct scene_object {
     sm_seed_def seed;
 } scene_object;
 
+/* A mesh shape as parsed (the field is made after validation, sc_build_meshes). */
+typedef struct scene_mesh {
+    char key[96];          /* where the shape is: "objects[1].shape", "colliders[2].shapes[3]", ... */
+    char file[1024];       /* the file as written in the scene */
+    double unit, scale[3], rotation[4], position[3];
+    int sign;              /* -1: auto (winding if closed, else one-sided), else an sm_mesh_sign */
+    double resolution;     /* field spacing = dx / resolution */
+    double band;           /* band half width in dx */
+    int solid;             /* an object's shape or clip: the mesh must be closed */
+    sm_mesh_field *field;  /* one reference (NULL until built) */
+    int cached;            /* 0: built, 1: read from the cache file, 2: an earlier shape's field */
+    double seconds;        /* build or read time, s */
+    size_t triangles;      /* elements of the loaded mesh */
+    uint64_t hash;         /* of the loaded (placed, welded) geometry */
+    int sign_used;         /* the sign rule of the field */
+    double centre[3];      /* the bounding box centre the mesh was moved by */
+} scene_mesh;
+
 typedef struct scene_param {
     char *key, *value;
     int used;
@@ -108,6 +129,8 @@ struct sm_scene {
     scene_param *params;
     char **read_keys; /* params.KEY the scene read that --set did not give (for suggestions) */
     int nread, read_cap;
+    int nmesh, mesh_cap;
+    scene_mesh *meshes;
     sm_world *world;
     int built;
     char motion_err[1024];
@@ -200,6 +223,7 @@ const char *sc_vec_label(int dim);
 int sc_vec_field(vctx *v, int t, const char *key, double out[3]);
 int sc_angvel_field(vctx *v, int t, const char *key, double out[3]);
 int sc_rotation_fields(vctx *v, int t, double q[4]);
+int sc_rotation_fields_any(vctx *v, int t, double q[4]); /* also out of the plane in 2D (a mesh's placement) */
 int sc_table_field(vctx *v, int t, const char *key);
 void sc_require_table_top(vctx *v);
 void sc_require(vctx *v, int present, const char *key, const char *what);
@@ -228,6 +252,16 @@ void sc_parse_materials(vctx *v, int top);
 void sc_parse_object(vctx *v, int t, int i, void *item, void *ctx);   /* item: scene_object, ctx: sc_list_defaults */
 void sc_parse_collider(vctx *v, int t, int i, void *item, void *ctx); /* item: scene_collider */
 void sc_parse_emitter(vctx *v, int t, int i, void *item, void *ctx);  /* item: sm_emitter_def, ctx: sc_list_defaults */
+
+/* ---- mesh shapes (meshes.c) ---- */
+/* The shape table on top of the stack (type = "mesh", path pushed) into s: a pending mesh (its
+ * field comes from sc_build_meshes). */
+void sc_parse_mesh_shape(vctx *v, int t, sm_shape *s);
+/* Loads every pending mesh, builds its field (or reads it from <scene dir>/.sandmpm-cache/) and
+ * puts it into its shape. Errors as scene errors at the shape's file key (SM_ERR_INVALID, also for
+ * a file that cannot be read) or SM_ERR_NOMEM. */
+sm_status sc_build_meshes(sm_scene *s, char *err, size_t errlen);
+void sc_free_meshes(sm_scene *s);
 
 /* ---- motion (motion.c) ---- */
 int sc_quat_axis_angle(double ax, double ay, double az, double deg, double q[4]);

@@ -475,7 +475,8 @@ static void check_rotation_2d(vctx *v, const double q[4]) {
 }
 
 /* rotation = {w,x,y,z} | axis_angle = {ax, ay, az, degrees} in table t; identity if neither. */
-int sc_rotation_fields(vctx *v, int t, double q[4]) {
+/* rotation | axis_angle; in 2D about z only if plane_only. */
+static int rotation_fields(vctx *v, int t, double q[4], int plane_only) {
     int has_q = sc_get(v, t, "rotation") != LUA_TNIL;
     lua_pop(v->L, 1);
     int has_aa = sc_get(v, t, "axis_angle") != LUA_TNIL;
@@ -500,7 +501,7 @@ int sc_rotation_fields(vctx *v, int t, double q[4]) {
                   sc_fmt_num(nb, n));
         }
         for (int k = 0; k < 4; k++) q[k] /= n;
-        check_rotation_2d(v, q);
+        if (plane_only) check_rotation_2d(v, q);
         sc_pop_key(v, old);
     } else if (has_aa) {
         size_t old = sc_push_key(v, "axis_angle");
@@ -509,11 +510,14 @@ int sc_rotation_fields(vctx *v, int t, double q[4]) {
         sc_vec_top(v, 4, "{ax, ay, az, degrees}", aa);
         lua_pop(v->L, 1);
         if (!sc_quat_axis_angle(aa[0], aa[1], aa[2], aa[3], q)) sc_fail(v, "the axis must be non-zero");
-        check_rotation_2d(v, q);
+        if (plane_only) check_rotation_2d(v, q);
         sc_pop_key(v, old);
     }
     return has_q || has_aa;
 }
+
+int sc_rotation_fields(vctx *v, int t, double q[4]) { return rotation_fields(v, t, q, 1); }
+int sc_rotation_fields_any(vctx *v, int t, double q[4]) { return rotation_fields(v, t, q, 0); }
 
 /* Checks that t[key] is a table and pushes it (returns 0 and pushes nothing if absent). */
 int sc_table_field(vctx *v, int t, const char *key) {

@@ -20,7 +20,7 @@
  *                degrees): products of interval overlaps (and a disk-in-rectangle area);
  *   any bounded shape entirely inside the box, or disjoint from it; inside-out shapes as the box
  *                less the shape.
- * Sampled otherwise (a rotated box or cylinder cut by the box; a shape with a clip): the fraction
+ * Sampled otherwise (a rotated box or cylinder cut by the box; a mesh; a shape with a clip): the fraction
  * of a lattice of cell midpoints inside, with at most 64 points per axis and no finer than half a
  * grid cell (small shapes cost little). */
 #define _POSIX_C_SOURCE 200809L
@@ -61,8 +61,29 @@ static int axis_aligned(const double q[4], int dim, int perm[3]) {
     return 1;
 }
 
+/* A mesh field's table box (in the mesh frame, placed at the shape's centre; the rotation is
+ * already in the vertices when the scene made it, applied here in any case). */
+static int mesh_bbox(const sm_shape *sh, int dim, double lo[3], double hi[3]) {
+    const sm_mesh_field_stats *st = sm_mesh_field_get_stats(sh->mesh);
+    if (st->container) return 0;
+    double R[3][3];
+    rotation_matrix(sh->rotation, R);
+    for (int a = 0; a < 3; a++) lo[a] = hi[a] = a < dim ? sh->center[a] : 0;
+    for (int a = 0; a < dim; a++) {
+        double r0 = 0, r1 = 0;
+        for (int b = 0; b < dim; b++) {
+            r0 += fmin(R[a][b] * st->lo[b], R[a][b] * st->hi[b]);
+            r1 += fmax(R[a][b] * st->lo[b], R[a][b] * st->hi[b]);
+        }
+        lo[a] += r0;
+        hi[a] += r1;
+    }
+    return 1;
+}
+
 int sc_shape_bbox(const sm_shape *sh, int dim, double lo[3], double hi[3]) {
     if (sh->inside_out || sh->kind == SM_SHAPE_HALFSPACE) return 0;
+    if (sh->kind == SM_SHAPE_MESH) return sh->mesh ? mesh_bbox(sh, dim, lo, hi) : 0;
     double r[3] = {0, 0, 0};
     if (sh->kind == SM_SHAPE_SPHERE) {
         r[0] = r[1] = r[2] = sh->radius;
@@ -249,6 +270,7 @@ static double exact_volume(const sm_shape *s, int dim, const double lo[3], const
         return v < 0 ? -1 : fmax(0, box_volume(lo, hi, dim) - v);
     }
     if (s->kind == SM_SHAPE_HALFSPACE) return halfspace_volume(s->normal, s->center, dim, lo, hi);
+    if (s->kind == SM_SHAPE_MESH) return -1; /* sampled */
     double blo[3], bhi[3];
     sc_shape_bbox(s, dim, blo, bhi);
     int inside = 1;

@@ -284,11 +284,86 @@ SM_API double sm_friction_angle_for_effective_friction(double mu, sm_cone_fit fi
 /* ------------------------------------------------------------------------------------------ */
 /* Shapes: signed distance functions, negative inside.                                          */
 
+/** Mesh fields: the signed distance field of a triangle mesh (3D) or of a closed polyline in the
+ *  xy plane (2D), exact on a narrow band of nodes around the surface (a bounding volume hierarchy
+ *  over the triangles) and stored sparsely in bricks, interpolated trilinearly (docs/mesh-fields.md).
+ *  Beyond the band the value is clamped to +-band with the right sign. The library never reads
+ *  files: vertices and elements come from the caller (the program reads them with assimp).
+ *  Reference counted: create gives one reference; a collider (sm_world_add_collider) holds its own
+ *  until the world is destroyed, seeding only uses the field during the call. Retain and release
+ *  from one thread at a time. */
+typedef struct sm_mesh_field sm_mesh_field;
+
+/** How the inside of a mesh is told from the outside. */
+typedef enum sm_mesh_sign {
+    /** Generalised winding number w >= 1/2 is inside: closed or nearly closed surfaces, overlapping
+     *  closed parts, non-manifold edges. A surface whose normals all point inwards (negative signed
+     *  volume) is a container: solid outside, free inside. */
+    SM_MESH_SIGN_WINDING = 0,
+    /** The side of the nearest feature's angle-weighted pseudo-normal: an open surface (terrain, a
+     *  sheet) is a one-sided collider, solid behind its normals. */
+    SM_MESH_SIGN_ONE_SIDED = 1
+} sm_mesh_sign;
+
+typedef struct sm_mesh_field_def {
+    int dim;                  /**< 3: triangles; 2: segments of an outline in the xy plane */
+    const double *vertices;   /**< vertex_count x 3 doubles (z ignored in 2D), m, in the mesh's frame */
+    size_t vertex_count;
+    const uint32_t *elements; /**< element_count x dim vertex indices (triangles / segments) */
+    size_t element_count;
+    double spacing;           /**< node spacing h of the field (the simulation dx or finer), > 0 */
+    double band;              /**< half width of the stored band (>= spacing) */
+    sm_mesh_sign sign;
+    int threads;              /**< OpenMP threads for the build; 0: the default. The field does not depend on it. */
+} sm_mesh_field_def;
+
+/** Winding sign, everything else zero. */
+SM_API sm_mesh_field_def sm_mesh_field_def_default(void);
+
+/** What a field holds and what its build cost. */
+typedef struct sm_mesh_field_stats {
+    int dim;
+    size_t elements;         /**< triangles (3D) / segments (2D) */
+    size_t vertices;
+    double spacing, band;
+    int table[3];            /**< bricks (8 cells a side) per axis of the coarse table (1 in z for 2D) */
+    size_t candidate_bricks; /**< bricks whose centre is within band + half diagonal of the surface */
+    size_t bricks;           /**< bricks stored: those with a node within the band */
+    size_t band_nodes;       /**< stored nodes with |phi| < band */
+    size_t bytes;            /**< memory of the field */
+    double lipschitz;        /**< bound on |grad phi| of the interpolant (>= 1; up to sqrt(dim) at sharp corners) */
+    double volume;           /**< signed volume (3D) / area (2D) enclosed; < 0: inside out */
+    int container;           /**< 1: winding rule with a negative volume: solid outside the surface */
+    double seconds;          /**< wall time of the build (0 for a field read back from bytes) */
+    double lo[3], hi[3];     /**< the field's table box in the mesh frame (the surface grown by about
+                                  the band): a solid lies inside it; beyond it phi = +band (-band for
+                                  a container) */
+} sm_mesh_field_stats;
+
+/** Builds a field. SM_OK and *out (one reference), or SM_ERR_INVALID (no elements, an index out
+ *  of range, a non-finite vertex, spacing or band out of range, a table too large for the spacing)
+ *  / SM_ERR_NOMEM with the reason in err (if not NULL) and *out = NULL. */
+SM_API sm_status sm_mesh_field_create(const sm_mesh_field_def *def, sm_mesh_field **out, char *err, size_t errlen);
+/** Adds a reference; returns f. */
+SM_API sm_mesh_field *sm_mesh_field_retain(sm_mesh_field *f);
+/** Drops a reference; the last one frees the field. NULL is fine. */
+SM_API void sm_mesh_field_release(sm_mesh_field *f);
+SM_API const sm_mesh_field_stats *sm_mesh_field_get_stats(const sm_mesh_field *f);
+/** Signed distance at x in the mesh's own frame, unit normal in grad (if not NULL). */
+SM_API double sm_mesh_field_distance(const sm_mesh_field *f, const double x[3], double grad[3]);
+/** Serialisation for a cache file: writes at most cap bytes to buf (buf may be NULL with cap 0)
+ *  and returns the size needed. The bytes depend on the definition alone (not on threads). */
+SM_API size_t sm_mesh_field_serialize(const sm_mesh_field *f, void *buf, size_t cap);
+/** A field from serialised bytes (one reference). SM_ERR_INVALID with a reason (bad magic,
+ *  version or byte order, truncated, checksum mismatch) or SM_ERR_NOMEM. */
+SM_API sm_status sm_mesh_field_deserialize(const void *buf, size_t n, sm_mesh_field **out, char *err, size_t errlen);
+
 typedef enum sm_shape_kind {
     SM_SHAPE_HALFSPACE = 0, /**< solid below the plane through `center` with outward `normal` */
     SM_SHAPE_BOX = 1,       /**< box with `half_extent`, rotated by `rotation` about `center` */
     SM_SHAPE_SPHERE = 2,    /**< ball (disk in 2D) of `radius` */
-    SM_SHAPE_CYLINDER = 3   /**< capped cylinder of `radius`, axis = local y, `half_height` */
+    SM_SHAPE_CYLINDER = 3,  /**< capped cylinder of `radius`, axis = local y, `half_height` */
+    SM_SHAPE_MESH = 4       /**< the field `mesh` (its own frame placed by `center` and `rotation`) */
 } sm_shape_kind;
 
 /** A primitive shape. In 2D, z components are ignored and rotation is about z only. */
@@ -301,6 +376,8 @@ typedef struct sm_shape {
     double half_height;     /**< cylinder half length along its axis, m */
     double rotation[4];     /**< unit quaternion (w,x,y,z): local -> shape frame. Default identity. */
     int inside_out;         /**< 1: the complement (a container: solid outside, free inside) */
+    const sm_mesh_field *mesh; /**< SM_SHAPE_MESH: the field, of the world's dimension (not owned:
+                                    colliders retain it, seeding uses it during the call) */
 } sm_shape;
 
 /** A shape with identity rotation and everything else zero. */

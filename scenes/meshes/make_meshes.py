@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Writes the small tool meshes of scenes/meshes/ (issue 15) as OBJ files, in metres:
 
-  shovel.obj  a curved blade (6 mm plate bent along its width) with a shaft
+  shovel.obj  a curved blade (2 cm plate bent along its width) with a shaft
   rake.obj    a bar with ten tines (separate overlapping closed parts: their union is taken by
               winding number)
   bowl.obj    a thick hemispherical shell with a flat foot (a container to pour sand into)
@@ -122,12 +122,13 @@ def revolve(profile, n):
 
 
 def shovel():
-    # Blade: an arc of radius 0.3 m through 50 degrees (about 0.26 m wide), 6 mm thick, 0.3 m long
+    # Blade: an arc of radius 0.3 m through 50 degrees (about 0.26 m wide), 2 cm thick (1.5 cells at
+    # the preview dx: a thinner plate lets the grid leak), 0.3 m long
     # (along z); the shaft (a 32 mm octagonal bar, 1 m) rises from the blade's back, overlapping it.
     R, half = 0.3, math.radians(25)
     arc = [(R * math.sin(a), R - R * math.cos(a)) for a in [-half + 2 * half * k / 16 for k in range(17)]]
     m = Mesh()
-    m.add(thick_curve(arc, 0.006, 0.0, 0.3))
+    m.add(thick_curve(arc, 0.02, 0.0, 0.3))
     octo = [(0.016 * math.cos(math.pi / 8 + k * math.pi / 4), 0.016 * math.sin(math.pi / 8 + k * math.pi / 4)) for k in range(8)]
     m.add(transform(prism(octo, 0.0, 1.0), lambda x, y, z: (x, y - 0.01, 0.2 + z)))
     return m
@@ -144,10 +145,11 @@ def rake():
 
 
 def bowl():
-    # Outer radius 0.2 m, wall 1.5 cm, rim at z = 0, a flat foot of radius 6 cm 1 cm below the
+    # Outer radius 0.2 m, wall 3 cm (3 cells at dx = 1 cm: a wall thinner than about 2 dx lets the
+    # grid leak), rim at z = 0, a flat foot of radius 6 cm 1 cm below the
     # outer sphere. The profile (r, z) runs: foot, outer arc up to the rim, inner arc down to the
     # axis (angle phi from the bottom: r = rho sin phi, z = -rho cos phi).
-    Ro, t, rf, n = 0.2, 0.015, 0.06, 48
+    Ro, t, rf, n = 0.2, 0.03, 0.06, 48
     foot = -Ro - 0.01
     p0 = math.asin(rf / Ro)
     prof = [(0.0, foot), (rf, foot)]
@@ -167,7 +169,7 @@ def plough():
 
 
 if __name__ == "__main__":
-    shovel().write("shovel.obj", "shovel: curved 6 mm blade 0.26 x 0.3 m, 1 m shaft")
+    shovel().write("shovel.obj", "shovel: curved 2 cm blade 0.26 x 0.3 m, 1 m shaft")
     rake().write("rake.obj", "rake: 0.5 m bar, ten 8 cm tines, 1 m handle")
-    bowl().write("bowl.obj", "bowl: outer radius 0.2 m, 1.5 cm wall, rim at z = 0")
+    bowl().write("bowl.obj", "bowl: outer radius 0.2 m, 3 cm wall, rim at z = 0")
     plough().write("plough.obj", "plough: wedge share and curved mouldboard, 0.5 m long")

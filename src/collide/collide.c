@@ -19,6 +19,9 @@
  *   cylinder   : (axis y) d = (sqrt(p_x^2 + p_z^2) - r, |p_y| - h);
  *                phi = |max(d, 0)| + min(max(d_0, d_1), 0) (exact capped-cylinder distance),
  *                the box formula in the (radial, axial) half plane.
+ *   mesh       : the interpolated field of sm_mesh_field (mesh_sdf.c), grad its normalised gradient;
+ *                it is Lipschitz with constant L = stats.lipschitz (>= 1, up to sqrt(d) at sharp
+ *                corners) rather than 1, and a collider's `lip` is the largest L of its shapes.
  *   In 2D the box/cylinder are their xy cross-sections (rectangles), the sphere a disk.
  * inside_out negates phi and grad. A collider is the union (min) of its shapes, optionally
  * negated as a whole, placed in the world by its pose: phi_w(x) = phi_l(R^T (x - p)),
@@ -26,6 +29,8 @@
 #include "collide/collide.h"
 
 #include <string.h>
+
+#include "collide/mesh_field.h"
 
 /* ------------------------------------------------------------------------------------------ */
 /* Small vector / quaternion helpers                                                            */
@@ -190,6 +195,8 @@ static double shape_local_sdf(const sm_shape *s, int dim, const double p[3], dou
         g[2] = g2[0] * er[1];
         return phi;
     }
+    case SM_SHAPE_MESH:
+        return sm_mesh_field_local(s->mesh, p, g);
     }
     SM_ASSERT(0 && "unknown shape kind");
     return HUGE_VAL;
@@ -246,6 +253,10 @@ void sm_collider_init(sm_collider *c, const sm_collider_def *def) {
     SM_ASSERT(def->shape_count >= 1 && def->shape_count <= SM_MAX_COLLIDER_SHAPES);
     memset(c, 0, sizeof *c);
     c->def = *def;
+    c->lip = 1.0;
+    for (int s = 0; s < def->shape_count; s++)
+        if (def->shapes[s].kind == SM_SHAPE_MESH)
+            c->lip = fmax(c->lip, sm_mesh_field_get_stats(def->shapes[s].mesh)->lipschitz);
     c->t0 = 0.0;
     c->dt = 0.0;
     c->pose0 = def->pose;
@@ -258,6 +269,16 @@ void sm_collider_init(sm_collider *c, const sm_collider_def *def) {
         c->v[k] = def->velocity[k];
         c->w[k] = def->angular_velocity[k];
     }
+}
+
+void sm_collider_retain_meshes(sm_collider *c) {
+    for (int s = 0; s < c->def.shape_count; s++)
+        if (c->def.shapes[s].kind == SM_SHAPE_MESH) sm_mesh_field_retain((sm_mesh_field *)c->def.shapes[s].mesh);
+}
+
+void sm_collider_release_meshes(sm_collider *c) {
+    for (int s = 0; s < c->def.shape_count; s++)
+        if (c->def.shapes[s].kind == SM_SHAPE_MESH) sm_mesh_field_release((sm_mesh_field *)c->def.shapes[s].mesh);
 }
 
 void sm_collider_begin_step(sm_collider *c, double t0, double dt) {

@@ -1,7 +1,7 @@
 /* Level-set colliders (thesis §3.6.3, Algorithm 7).
  *
- * A collider is a union of analytic signed-distance shapes (half-space, box, sphere, capped
- * cylinder; each optionally inside-out), optionally complemented as a whole, moving rigidly.
+ * A collider is a union of signed-distance shapes (half-space, box, sphere, capped cylinder, mesh
+ * field; each optionally inside-out), optionally complemented as a whole, moving rigidly.
  * phi < 0 is inside the solid. Collision acts on grid node velocities, never on particles.
  *
  * Per step the world calls sm_collider_begin_step (pose at t^n and t^{n+1}, rigid velocity over
@@ -21,11 +21,18 @@ typedef struct sm_collider {
     double R0[9], R1[9];   /* rotation matrices of pose0, pose1 (row-major, local -> world) */
     double v[3];           /* linear velocity of the origin over the step, m/s */
     double w[3];           /* angular velocity over the step, rad/s (world frame) */
+    double lip;            /* Lipschitz constant of phi: 1 for analytic shapes, the largest
+                              stats.lipschitz of its mesh shapes otherwise (for the culling bounds) */
 } sm_collider;
 
 /* Copies the definition, sets pose0 = pose1 = def->pose (or motion(user, 0) if a motion function
  * is set), velocities from the def. */
 void sm_collider_init(sm_collider *c, const sm_collider_def *def);
+
+/* The references a collider of the world holds on its mesh fields: taken when it is added
+ * (sm_world_add_collider), dropped when the world is destroyed. */
+void sm_collider_retain_meshes(sm_collider *c);
+void sm_collider_release_meshes(sm_collider *c);
 
 /* Prepares the step [t0, t0+dt]: pose1 from def->motion(t0+dt) if set, else by integrating the
  * constant linear/angular velocity exactly (rotation by the quaternion exponential); v and w are

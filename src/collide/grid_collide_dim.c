@@ -39,12 +39,14 @@ static inline double block_center(const sm_grid *g, const sm_step_ctx *c, size_t
 
 /* 1 if no collider can act on any node of a block with centre ctr and half-diagonal R whose
  * nodes move at most `reach` (m) in the step, contact tolerance included: every collider's signed
- * distance, at both poses, exceeds R + reach. Signed distances are 1-Lipschitz
- * (tests/test_collide.c checks it), so the bound at the centre covers every node. */
+ * distance, at both poses, exceeds lip (R + reach). Analytic signed distances are 1-Lipschitz
+ * (tests/test_collide.c checks it), a mesh field lip-Lipschitz (collide.h), so the bound at the
+ * centre covers every node. */
 static inline int block_free(const sm_collider *cols, int ncol, const double ctr[3], double R, double reach) {
     for (int b = 0; b < ncol; b++) {
-        if (!(sm_collider_phi(&cols[b], D, 0, ctr, NULL) > R + reach)) return 0;
-        if (!(sm_collider_phi(&cols[b], D, 1, ctr, NULL) > R + reach)) return 0;
+        const double bound = cols[b].lip * (R + reach);
+        if (!(sm_collider_phi(&cols[b], D, 0, ctr, NULL) > bound)) return 0;
+        if (!(sm_collider_phi(&cols[b], D, 1, ctr, NULL) > bound)) return 0;
     }
     return 1;
 }

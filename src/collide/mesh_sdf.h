@@ -16,47 +16,13 @@
 
 #include "core/common.h"
 
-/* How the inside is told from the outside. */
-typedef enum sm_mesh_sign {
-    /* Generalised winding number w >= 1/2 is inside (closed or nearly closed surfaces, several
-     * overlapping closed parts, non-manifold edges). A surface whose normals all point inwards
-     * (negative signed volume) is a container: solid outside, free inside. */
-    SM_MESH_SIGN_WINDING = 0,
-    /* The side of the nearest feature's angle-weighted pseudo-normal: an open surface (a terrain,
-     * a sheet) is a one-sided collider, solid behind its normals. */
-    SM_MESH_SIGN_ONE_SIDED = 1
-} sm_mesh_sign;
-
-typedef struct sm_mesh_sdf_def {
-    int dim;                  /* 3: triangles; 2: segments of an outline in the xy plane */
-    const double *vertices;   /* vertex_count x 3 doubles (z ignored in 2D) */
-    size_t vertex_count;
-    const uint32_t *elements; /* element_count x dim vertex indices (triangles / segments) */
-    size_t element_count;
-    double spacing;           /* node spacing h of the field (the simulation dx or finer), > 0 */
-    double band;              /* half width of the stored band (>= spacing; 3 dx is a good choice) */
-    sm_mesh_sign sign;
-    int threads;              /* OpenMP threads for the build; 0: the default. Results do not depend on it. */
-} sm_mesh_sdf_def;
+/* The definition and the statistics are the public API's (sandmpm.h: sm_mesh_field_def,
+ * sm_mesh_field_stats, sm_mesh_sign); sm_mesh_field (mesh_field.c) is the reference-counted
+ * handle around an sm_mesh_sdf. */
+typedef sm_mesh_field_def sm_mesh_sdf_def;
+typedef sm_mesh_field_stats sm_mesh_sdf_stats;
 
 sm_mesh_sdf_def sm_mesh_sdf_def_default(void);
-
-/* What a build made and what it cost. */
-typedef struct sm_mesh_sdf_stats {
-    int dim;
-    size_t elements;        /* triangles (3D) / segments (2D) */
-    size_t vertices;
-    double spacing, band;
-    int table[3];           /* bricks per axis of the coarse table (1 in z for 2D) */
-    size_t candidate_bricks; /* bricks whose centre is within band + half diagonal of the surface */
-    size_t bricks;          /* bricks stored: those with a node within the band */
-    size_t band_nodes;      /* stored nodes with |phi| < band */
-    size_t bytes;           /* memory of the field (table, coarse nodes, bricks, header) */
-    double lipschitz;       /* bound on |grad phi| of the interpolant over all stored cells */
-    double volume;          /* signed volume (3D) / area (2D) enclosed; < 0: inside out */
-    int container;          /* 1: winding rule with a negative volume: solid outside the surface */
-    double seconds;         /* wall time of the build (0 for a field read back from bytes) */
-} sm_mesh_sdf_stats;
 
 typedef struct sm_mesh_sdf sm_mesh_sdf;
 

@@ -10,6 +10,7 @@
  * Each particle gets V0 = dx^d / ppc and mass rho V0 (thesis §3.4.4 mass lumping; DESIGN). */
 #include <string.h>
 
+#include "collide/mesh_field.h"
 #include "core/hash.h"
 #include "world/world.h"
 
@@ -68,6 +69,10 @@ static void shape_bounds(const sm_shape *s, int dim, const double lo[3], const d
         ext[0] = ext[1] = ext[2] = r;
         break;
     }
+    case SM_SHAPE_MESH: /* the field's box about the mesh frame's origin (a container: everywhere) */
+        ext[0] = ext[1] = ext[2] = sm_mesh_field_extent(s->mesh);
+        if (!isfinite(ext[0])) return;
+        break;
     default: return;
     }
     for (int a = 0; a < dim; a++) {
@@ -251,6 +256,12 @@ sm_status sm_world_seed_shape(sm_world *w, const sm_shape *shape, const sm_seed_
     for (int a = 0; a < 3; a++)
         if (!isfinite(sd->velocity[a]) || !isfinite(sd->angular_velocity[a]))
             return sm_world_fail(w, SM_ERR_INVALID, "seed velocity: must be finite");
+    for (int k = 0; k < 2; k++) {
+        const sm_shape *s = k ? sd->clip : shape;
+        if (s && s->kind == SM_SHAPE_MESH && (!s->mesh || sm_mesh_field_get_stats(s->mesh)->dim != w->dim))
+            return sm_world_fail(w, SM_ERR_INVALID, "seed %s: a mesh shape needs a field of the world's dimension",
+                                 k ? "clip" : "shape");
+    }
     const int d = w->dim;
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}, bmin[3], bmax[3];
     for (int a = 0; a < d; a++) {

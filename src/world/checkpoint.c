@@ -48,6 +48,7 @@ static void put_collider_def(writer *o, const sm_collider_def *c) {
     memset(&z, 0, sizeof z);
     z.shape_count = c->shape_count;
     memcpy(z.shapes, c->shapes, sizeof z.shapes);
+    for (int k = 0; k < SM_MAX_COLLIDER_SHAPES; k++) z.shapes[k].mesh = NULL; /* a pointer: not state */
     z.inside_out = c->inside_out;
     z.mode = c->mode;
     z.friction = c->friction;
@@ -226,6 +227,11 @@ static sm_status read_defs(reader *r, sm_world *w, int build) {
         c.motion = NULL;
         c.motion_user = NULL;
         if (r->short_read) break;
+        for (int k = 0; build && k < c.shape_count && k < SM_MAX_COLLIDER_SHAPES; k++)
+            if (c.shapes[k].kind == SM_SHAPE_MESH)
+                return sm_world_fail(w, SM_ERR_INVALID,
+                                     "checkpoint: collider %u has a mesh shape, whose field a checkpoint does not hold: "
+                                     "restore it into a world built with its colliders (sm_world_restore)", i);
         if (build && sm_world_add_collider(w, &c, NULL) != SM_OK) return SM_ERR_INVALID;
         sm_collider *s = &w->colliders[i];
         s->t0 = get_f64(r);

@@ -1,5 +1,6 @@
 /* The collider API of the world: the checks of a definition (the library's limits, usable
- * without a world), adding a collider (before the domain walls, which stay last), queries. */
+ * without a world), adding a collider (before the domain walls, which stay last; it retains its
+ * mesh fields until the world is destroyed), queries. */
 #include <string.h>
 
 #include "world/world.h"
@@ -24,6 +25,12 @@ static int check_shape(const sm_shape *s, int dim, int idx, char *err, size_t er
     case SM_SHAPE_CYLINDER:
         if (!(s->radius > 0) || !isfinite(s->radius)) return (sm_check_fail(err, errlen, "shapes[%d].radius: must be > 0, got %g", idx, s->radius), 0);
         if (!(s->half_height > 0) || !isfinite(s->half_height)) return (sm_check_fail(err, errlen, "shapes[%d].half_height: must be > 0, got %g", idx, s->half_height), 0);
+        break;
+    case SM_SHAPE_MESH:
+        if (!s->mesh) return (sm_check_fail(err, errlen, "shapes[%d].mesh: a mesh shape needs a field (sm_mesh_field_create)", idx), 0);
+        if (sm_mesh_field_get_stats(s->mesh)->dim != dim)
+            return (sm_check_fail(err, errlen, "shapes[%d].mesh: a %dD field in a %dD world", idx,
+                                  sm_mesh_field_get_stats(s->mesh)->dim, dim), 0);
         break;
     default: return (sm_check_fail(err, errlen, "shapes[%d].kind: unknown value %d", idx, (int)s->kind), 0);
     }
@@ -65,6 +72,7 @@ sm_status sm_world_add_collider(sm_world *w, const sm_collider_def *c, int *id) 
     /* The walls live after the user colliders: move them up one place. */
     memmove(&w->colliders[w->ncolliders + 1], &w->colliders[w->ncolliders], (size_t)w->nwalls * sizeof *w->colliders);
     sm_collider_init(&w->colliders[w->ncolliders], c);
+    sm_collider_retain_meshes(&w->colliders[w->ncolliders]);
     if (w->time != 0) {
         /* Added mid-run: evaluate a scripted pose at the current time. */
         if (c->motion) {

@@ -218,6 +218,7 @@ void sm_world_destroy(sm_world *w) {
     sm_transfer_cache_free(&w->cache);
     sm_implicit_ws_free(&w->imp);
     free(w->mats);
+    for (int i = 0; i < w->ncolliders; i++) sm_collider_release_meshes(&w->colliders[i]);
     free(w->colliders);
     free(w->emitters);
     free(w->emit_buf);

@@ -372,8 +372,8 @@ sm_status sm_world_restore(sm_world *w, const void *data, size_t len) {
     sm_emitter *tems = tmp->emitters;
     if (!cols || !ems) st = sm_world_fail(w, SM_ERR_NOMEM, "checkpoint: out of memory");
     if (st == SM_OK) {
-        memcpy(cols, w->colliders, (size_t)w->ncolliders * sizeof *cols);
-        memcpy(ems, w->emitters, (size_t)w->nemitters * sizeof *ems);
+        if (w->ncolliders > 0) memcpy(cols, w->colliders, (size_t)w->ncolliders * sizeof *cols);
+        if (w->nemitters > 0) memcpy(ems, w->emitters, (size_t)w->nemitters * sizeof *ems); /* NULL if none */
         tmp->colliders = cols;
         tmp->emitters = ems;
         st = read_defs(&r, tmp, 0);

@@ -140,6 +140,7 @@ typedef struct reader {
 } reader;
 
 static int get(reader *r, void *dst, size_t n) {
+    if (n == 0) return !r->short_read; /* dst may be NULL (an empty array) */
     if (r->short_read || n > r->left) {
         r->short_read = 1;
         memset(dst, 0, n);

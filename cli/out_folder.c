@@ -27,11 +27,25 @@ static int has_frames(const sm_run_manifest *m) {
 }
 
 /* Removes what old lists, saying why. */
+/* A killed run may have written the frame after the last one its manifest lists (the manifest
+ * follows each frame): that frame file, of each kind, goes too. */
+static void remove_unlisted_next(const char *out, const sm_run_manifest *old, int *removed) {
+    for (int k = 0; k < SM_FRAME_KINDS; k++) {
+        const int next = sm_run_manifest_count(old, (sm_frame_kind)k) > 0 ? old->last[k] + 1 : 0;
+        char path[4096];
+        if (snprintf(path, sizeof path, "%s/frame_%04d.%s", out, next, sm_frame_kind_ext((sm_frame_kind)k)) <
+                (int)sizeof path &&
+            remove(path) == 0)
+            (*removed)++;
+    }
+}
+
 static sm_status remove_old(const char *out, const sm_run_manifest *old, const char *why) {
     char err[SM_MSG_MAX], what[64];
     int removed = 0;
     frames_text(old, what, sizeof what);
     sm_status st = sm_run_manifest_remove(out, old, &removed, err, sizeof err);
+    if (st == SM_OK) remove_unlisted_next(out, old, &removed);
     if (st != SM_OK) fprintf(stderr, "sandmpm run: %s\n", err);
     else if (removed > 0)
         fprintf(stderr, "sandmpm run: %s: removed %d file%s (%s) from %s/\n", why, removed, removed == 1 ? "" : "s", what,

@@ -147,8 +147,9 @@ for sig in INT TERM; do
     [ -n "$last" ] && grep -qx "frame_files ply 0 $last" "$d/run_manifest.txt" && grep -qx "state stopped" "$d/run_manifest.txt" &&
         ok || bad "SIG$sig: the run manifest after frame $last: $(cat "$d/run_manifest.txt")"
 done
-d=$TMP/sig_twice # frames of 10 s (10,000 steps): the second SIGINT comes during one
-"$BIN" run "$tiny" --set fps=0.1 --frames 1000 --out "$d" >/dev/null 2>"$TMP/err" &
+d=$TMP/sig_twice # frames of 50 s (50,000 steps): the second SIGINT comes during one (at 10 s a
+# frame, one thread did the 10,000 steps of 64 particles within the 0.3 s between the signals)
+"$BIN" run "$tiny" --set fps=0.02 --frames 1000 --out "$d" >/dev/null 2>"$TMP/err" &
 p=$!
 wait_for "$d/frame_0000.ply" 60
 kill -INT $p; sleep 0.3; kill -INT $p

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include <dirent.h>
+#include <sys/stat.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -253,7 +254,13 @@ static sm_status prepare_folder(const char *out) {
         fprintf(stderr, "sandmpm run: %s\n", err);
         return st;
     }
-    return cli_remove_stale("run", out);
+    st = cli_remove_stale("run", out);
+    char ckpt[SM_PATH_MAX];
+    struct stat sb;
+    if (st == SM_OK && snprintf(ckpt, sizeof ckpt, "%s/checkpoints", out) < (int)sizeof ckpt && stat(ckpt, &sb) == 0 &&
+        S_ISDIR(sb.st_mode))
+        st = cli_remove_stale("run", ckpt);
+    return st;
 }
 
 /* FNV-1a over the scene file's bytes, the --set pairs and the quality: what a resume must match. */

@@ -177,7 +177,9 @@ ondisk=$(ls "$d" | grep -c '^frame_.*\.ply$')
     bad "after SIGKILL: the manifest lists frames 0..$listed, $ondisk PLY files on disk"
 sh -c 'exit 0' & dead=$!
 wait $dead
-touch "$d/.frame_0007.ply.tmp.$dead" "$d/.frames.pvd.tmp.$dead" "$d/.frame_0008.ply.tmp.$$" "$d/frame_0009.vtp.tmp"
+mkdir -p "$d/checkpoints"
+touch "$d/.frame_0007.ply.tmp.$dead" "$d/.frames.pvd.tmp.$dead" "$d/.frame_0008.ply.tmp.$$" "$d/frame_0009.vtp.tmp" \
+    "$d/checkpoints/.ckpt_00000160.smc.tmp.$dead"
 expect 0 "a run after SIGKILLs" "$BIN" run "$tiny" --frames 1 --out "$d"
 has "$TMP/err" "removed" "stale temporaries: said so"
 [ -z "$(find "$d" -name '*.tmp*' ! -name ".frame_0008.ply.tmp.$$")" ] && ok ||

@@ -245,6 +245,11 @@ static int is_our_file(const char *name, size_t n) {
     static const char *const fixed[] = {"frames.pvd", "render.txt", "video.mp4", "run_manifest.txt"};
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
         if (n == strlen(fixed[i]) && !memcmp(name, fixed[i], n)) return 1;
+    if (n == 17 && !memcmp(name, "ckpt_", 5) && !memcmp(name + 13, ".smc", 4)) { /* ckpt_NNNNNNNN.smc */
+        for (size_t i = 5; i < 13; i++)
+            if (name[i] < '0' || name[i] > '9') return 0;
+        return 1;
+    }
     if (n < 14 || memcmp(name, "frame_", 6) != 0) return 0; /* frame_NNNN.ext */
     size_t d = 6;
     while (d < n && name[d] >= '0' && name[d] <= '9') d++;

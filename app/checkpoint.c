@@ -45,25 +45,77 @@ static int write_all(int fd, const unsigned char *p, size_t n) {
     return 0;
 }
 
-/* tmp, fsync, rename, fsync of the folder. */
-static sm_status write_durably(const char *dir, const char *path, const membuf *b, char *err, size_t errlen) {
+/* A checkpoint file being written: bytes go through a 64 KiB buffer to the temporary, the crc32
+ * and the length follow them (no copy of the stream in memory). */
+typedef struct file_out {
+    int fd, failed, err; /* err: errno of the first failure */
+    size_t fill;
+    uint64_t bytes;
+    uLong crc;
+    unsigned char buf[1 << 16];
+} file_out;
+
+static void flush_out(file_out *o) {
+    if (!o->failed && o->fill && write_all(o->fd, o->buf, o->fill) != 0) {
+        o->failed = 1;
+        o->err = errno;
+    }
+    o->fill = 0;
+}
+
+static int file_write(void *user, const void *data, size_t n) {
+    file_out *o = user;
+    const unsigned char *p = data;
+    o->crc = crc32_z(o->crc, p, n);
+    o->bytes += n;
+    while (n > 0 && !o->failed) {
+        size_t k = sizeof o->buf - o->fill < n ? sizeof o->buf - o->fill : n;
+        memcpy(o->buf + o->fill, p, k);
+        o->fill += k;
+        p += k;
+        n -= k;
+        if (o->fill == sizeof o->buf) flush_out(o);
+    }
+    return o->failed;
+}
+
+static void put_le(file_out *o, uint64_t v, int bytes) {
+    unsigned char t[8];
+    for (int i = 0; i < bytes; i++) t[i] = (unsigned char)(v >> (8 * i));
+    file_write(o, t, (size_t)bytes);
+}
+
+/* The stream (from w, or the bytes of one saved earlier when w is NULL) and the trailer, written to
+ * a temporary, fsynced, renamed to path, the folder fsynced. */
+static sm_status write_durably(const char *dir, const char *path, const sm_world *w, const membuf *saved, int frame,
+                               uint64_t scene_hash, char *err, size_t errlen) {
     char tmp[SM_PATH_MAX];
     if (sm_temp_name(tmp, sizeof tmp, path, (long)getpid()) != 0) {
         snprintf(err, errlen, "%s: name too long", path);
         return SM_ERR_IO;
     }
+    file_out *o = calloc(1, sizeof *o);
+    if (!o) {
+        snprintf(err, errlen, "checkpoint of frame %d: out of memory", frame);
+        return SM_ERR_NOMEM;
+    }
     int slot = sm_track_temporary(tmp);
-    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    int ok = fd >= 0 && write_all(fd, b->data, b->len) == 0 && fsync(fd) == 0;
-    int e = errno;
-    if (fd >= 0 && close(fd) != 0 && ok) {
-        ok = 0;
-        e = errno;
-    }
-    if (ok && rename(tmp, path) != 0) {
-        ok = 0;
-        e = errno;
-    }
+    o->fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    o->crc = crc32(0L, Z_NULL, 0);
+    if (o->fd < 0) o->failed = 1, o->err = errno;
+    if (!o->failed && w) sm_world_save(w, file_write, o);
+    if (!o->failed && !w) file_write(o, saved->data, saved->len);
+    const uint64_t stream = o->bytes;
+    put_le(o, (uint64_t)frame, 4);
+    put_le(o, scene_hash, 8);
+    put_le(o, stream, 8);
+    file_write(o, "SMCK", 4);
+    put_le(o, o->crc, 4);
+    flush_out(o);
+    int ok = !o->failed && fsync(o->fd) == 0, e = o->failed ? o->err : errno;
+    if (o->fd >= 0 && close(o->fd) != 0 && ok) ok = 0, e = errno;
+    if (ok && rename(tmp, path) != 0) ok = 0, e = errno;
+    free(o);
     if (!ok) unlink(tmp);
     if (slot >= 0) sm_untrack_temporary(slot);
     if (!ok) {
@@ -100,42 +152,28 @@ static void prune(const char *dir, int keep) {
     }
 }
 
-static void put_le(membuf *b, uint64_t v, int bytes) {
-    unsigned char t[8];
-    for (int i = 0; i < bytes; i++) t[i] = (unsigned char)(v >> (8 * i));
-    mem_write(b, t, (size_t)bytes);
-}
-
 static uint64_t get_le(const unsigned char *p, int bytes) {
     uint64_t v = 0;
     for (int i = 0; i < bytes; i++) v |= (uint64_t)p[i] << (8 * i);
     return v;
 }
 
-sm_status sm_checkpoint_write(const char *out_dir, const sm_world *w, int frame, uint64_t scene_hash, int keep, char *path,
-                              size_t pathlen, char *err, size_t errlen) {
-    char dir[SM_PATH_MAX];
-    if (snprintf(dir, sizeof dir, "%s/checkpoints", out_dir) >= (int)sizeof dir - SM_NAME_RESERVE) {
+/* out_dir/checkpoints (made if missing) and the file name of frame's checkpoint in it. */
+static sm_status checkpoint_path(const char *out_dir, int frame, char *dir, size_t dirlen, char *path, size_t pathlen,
+                                 char *err, size_t errlen) {
+    if (snprintf(dir, dirlen, "%s/checkpoints", out_dir) >= (int)dirlen - SM_NAME_RESERVE ||
+        snprintf(path, pathlen, "%s/ckpt_%08d.smc", dir, frame) >= (int)pathlen) {
         snprintf(err, errlen, "%s: name too long for its checkpoints", out_dir);
         return SM_ERR_IO;
     }
-    sm_status st = sm_make_dirs(dir, err, errlen);
-    if (st != SM_OK) return st;
-    membuf b = {0};
-    if (sm_world_save(w, mem_write, &b) != SM_OK) {
-        free(b.data);
-        snprintf(err, errlen, "checkpoint of frame %d: out of memory", frame);
-        return SM_ERR_NOMEM;
-    }
-    const size_t stream = b.len;
-    put_le(&b, (uint64_t)frame, 4);
-    put_le(&b, scene_hash, 8);
-    put_le(&b, stream, 8);
-    mem_write(&b, "SMCK", 4);
-    put_le(&b, crc32(0L, b.data, (uInt)b.len), 4);
-    if (snprintf(path, pathlen, "%s/ckpt_%08d.smc", dir, frame) >= (int)pathlen) st = SM_ERR_IO;
-    st = st != SM_OK ? st : b.len == stream + TRAILER_BYTES ? write_durably(dir, path, &b, err, errlen) : SM_ERR_NOMEM;
-    free(b.data);
+    return sm_make_dirs(dir, err, errlen);
+}
+
+sm_status sm_checkpoint_write(const char *out_dir, const sm_world *w, int frame, uint64_t scene_hash, int keep, char *path,
+                              size_t pathlen, char *err, size_t errlen) {
+    char dir[SM_PATH_MAX];
+    sm_status st = checkpoint_path(out_dir, frame, dir, sizeof dir, path, pathlen, err, errlen);
+    if (st == SM_OK) st = write_durably(dir, path, w, NULL, frame, scene_hash, err, errlen);
     if (st == SM_OK) prune(dir, keep);
     return st;
 }
@@ -181,6 +219,27 @@ typedef struct ckpt_state {
     const sm_world *w;
 } ckpt_state;
 
+static int count_write(void *user, const void *data, size_t n) {
+    (void)data;
+    *(size_t *)user += n;
+    return 0;
+}
+
+/* w's stream into b, whose capacity is made exactly the stream's size first (growing by doubling
+ * would hold up to twice the particle data: docs/outputs.md, memory). */
+static sm_status save_exactly(const sm_world *w, membuf *b) {
+    size_t need = 0;
+    sm_world_save(w, count_write, &need);
+    if (need != b->cap) {
+        unsigned char *q = realloc(b->data, need ? need : 1);
+        if (!q) return SM_ERR_NOMEM;
+        b->data = q;
+        b->cap = need;
+    }
+    b->len = 0;
+    return sm_world_save(w, mem_write, b);
+}
+
 static sm_status ckpt_begin(sm_sink *s, const sm_run_info *run, char *err, size_t errlen) {
     ckpt_state *c = calloc(1, sizeof *c);
     if (!c) {
@@ -198,7 +257,7 @@ static sm_status ckpt_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_
     const sm_checkpoint_config *c = s->config;
     ckpt_state *cs = s->state;
     cs->last.len = 0;
-    cs->last_frame = sm_world_save(fr->w, mem_write, &cs->last) == SM_OK ? fr->frame : -1;
+    cs->last_frame = save_exactly(fr->w, &cs->last) == SM_OK ? fr->frame : -1;
     if (c->every <= 0 || fr->frame == 0 || fr->frame % c->every != 0) return SM_OK;
     char path[SM_PATH_MAX];
     return sm_checkpoint_write(fr->out_dir, fr->w, fr->frame, c->scene_hash, c->keep, path, sizeof path, err, errlen);
@@ -209,16 +268,11 @@ static sm_status ckpt_end(sm_sink *s, sm_status run_status, char *err, size_t er
     const sm_checkpoint_config *c = s->config;
     ckpt_state *cs = s->state;
     sm_status st = SM_OK;
-    if (run_status == SM_ERR_NUMERICAL && cs->last_frame >= 0) {
-        sm_world *good;
-        char e2[256], path[SM_PATH_MAX];
-        st = sm_world_load(cs->last.data, cs->last.len, &good, e2, sizeof e2);
-        if (st == SM_OK) {
-            st = sm_checkpoint_write(cs->out, good, cs->last_frame, c->scene_hash, c->keep, path, sizeof path, err, errlen);
-            sm_world_destroy(good);
-        } else {
-            snprintf(err, errlen, "the last good state: %s", e2);
-        }
+    if (run_status == SM_ERR_NUMERICAL && cs->last_frame >= 0) { /* the saved bytes, as they are */
+        char dir[SM_PATH_MAX], path[SM_PATH_MAX];
+        st = checkpoint_path(cs->out, cs->last_frame, dir, sizeof dir, path, sizeof path, err, errlen);
+        if (st == SM_OK) st = write_durably(dir, path, NULL, &cs->last, cs->last_frame, c->scene_hash, err, errlen);
+        if (st == SM_OK) prune(dir, c->keep);
     }
     free(cs->last.data);
     free(cs);

@@ -84,6 +84,18 @@ sm_status cli_check_memory(const char *cmd, const sm_scene_settings *st);
 sm_status cli_build_scene(const char *cmd, sm_scene *sc);
 /* Physical memory of this machine, bytes (0 if unknown). */
 double cli_machine_bytes(void);
+
+/* Default --checkpoint-every: a preview frame of the default scene (29,796 particles) took about
+ * 1.7 to 2.3 s of wall time on the 2-core test machine (docs/checkpoints.md), so 20 frames lose
+ * at most about 40 s. Default --keep-checkpoints: 2. */
+#define CLI_CHECKPOINT_EVERY 20
+#define CLI_KEEP_CHECKPOINTS 2
+
+/* sandmpm info's estimates of a run (time, disk, memory) from a short probe of the built world;
+ * the probe steps the world. SM_OK or the failing step's status (said on stderr). */
+sm_status cli_info_estimates(sm_scene *sc);
+/* The process's peak resident memory so far (getrusage), bytes; 0 if unknown. */
+double cli_peak_memory_bytes(void);
 /* Removes from dir the temporaries that a killed run or render left (app/io/files.h), saying so. */
 sm_status cli_remove_stale(const char *cmd, const char *dir);
 /* dir/video.mp4 from dir's PNG frames at fps (app/io/video.h); the outcome printed. */

@@ -14,7 +14,7 @@ static void print_settings(const cli_scene_opts *so, const sm_scene *sc) {
     if (d->dim == 3) printf(" x [%g, %g]", d->domain_min[2], d->domain_max[2]);
     printf(" m\n");
     printf("frames       %d at %g fps (end time %g s)\n", st->frames, st->fps, st->end_time);
-    printf("estimate     %zu particles seeded, %zu emitted; memory %.3f GB (machine %.1f GB)\n", st->estimated_particles,
+    printf("estimate     %zu particles seeded, %zu emitted; world memory %.3f GB (machine %.1f GB)\n", st->estimated_particles,
            st->estimated_emitted, (double)st->estimated_bytes / 1e9, cli_machine_bytes() / 1e9);
     for (int i = 0; i < sm_scene_mesh_count(sc); i++) {
         sm_scene_mesh_info m;
@@ -74,6 +74,7 @@ static sm_status info_command(int argc, char **argv) {
     st = cli_check_memory("info", sm_scene_get_settings(sc));
     if (st == SM_OK) st = cli_build_scene("info", sc);
     if (st == SM_OK) print_world(sc);
+    if (st == SM_OK) st = cli_info_estimates(sc);
     sm_scene_destroy(sc);
     return st;
 }

@@ -26,17 +26,12 @@ typedef struct run_args {
     int quiet, verbose;                  /* -q/--quiet, -v/--verbose (the progress sink) */
 } run_args;
 
-/* Default --checkpoint-every: a preview frame of the default scene (29,796 particles) took about
- * 1.7 to 2.3 s of wall time on the 2-core test machine (docs/checkpoints.md), so 20 frames lose
- * at most about 40 s. */
-#define CLI_CHECKPOINT_EVERY 20
-
 static sm_status parse_args(int argc, char **argv, run_args *a) {
     memset(a, 0, sizeof *a);
     a->frames = -1;
     a->end = -1;
     a->ckpt_every = -1; /* the scene's checkpoint_every, else CLI_CHECKPOINT_EVERY */
-    a->keep = 2;
+    a->keep = CLI_KEEP_CHECKPOINTS;
     for (int i = 0; i < argc; i++) {
         const char *s = argv[i];
         int r = cli_parse_scene_opt("run", argc, argv, &i, &a->so);

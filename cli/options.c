@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "app/io/files.h"
@@ -37,6 +38,11 @@ int cli_parse_double(const char *s, double *out) {
 double cli_machine_bytes(void) {
     long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
     return (pages > 0 && page > 0) ? (double)pages * (double)page : 0;
+}
+
+double cli_peak_memory_bytes(void) {
+    struct rusage u;
+    return getrusage(RUSAGE_SELF, &u) == 0 ? (double)u.ru_maxrss * 1024.0 : 0; /* ru_maxrss: KiB on Linux */
 }
 
 /* --set KEY=VALUE: the key copied into so->keybuf, the value pointing into argv. */

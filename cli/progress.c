@@ -91,7 +91,8 @@ static sm_status progress_end(sm_sink *s, sm_status run_status, char *err, size_
                 p->first_frame, p->last_frame, steps, p->wall);
         if (p->wall > 0 && steps > 0)
             fprintf(stderr, ", %.3g particle-steps/s", (double)p->prev.particles * (double)steps / p->wall);
-        fprintf(stderr, "; files in %s/ (listed in %s)\n", c->out_dir, SM_RUN_MANIFEST_NAME);
+        fprintf(stderr, ", peak memory %.4g MB; files in %s/ (listed in %s)\n", cli_peak_memory_bytes() / 1e6, c->out_dir,
+                SM_RUN_MANIFEST_NAME);
     }
     free(p);
     s->state = NULL;

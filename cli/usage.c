@@ -7,7 +7,7 @@ void cli_usage(FILE *f) {
                "commands:\n"
                "  run [SCENE]     run a scene file (Lua); without SCENE the built-in default:\n"
                "                  a 3D sand column collapsing on the ground\n"
-               "  info SCENE      print the resolved scene (particles, grid, time steps, memory) without running it\n"
+               "  info SCENE      print the resolved scene and estimate a run's time, disk and memory, without running it\n"
                "  render OUTDIR   turn a run's frames (OUTDIR/frame_NNNN.ply) into PNG images\n"
                "  bench           particle-steps/s per stage: 2D and 3D, float and double, 1 and 2 threads\n\n"
                "  --help          this text; `sandmpm help COMMAND` or `sandmpm COMMAND --help` for a\n"
@@ -52,8 +52,11 @@ void cli_usage_run(FILE *f) {
 void cli_usage_info(FILE *f) {
     fprintf(f, "usage: sandmpm info SCENE [--set KEY=VALUE]... [--quality preview|paper|test]\n\n"
                "Loads and builds SCENE without running it and prints: particles (estimated and seeded), the\n"
-               "grid, the time-step bounds, frames, and the memory estimate. A scene whose memory estimate\n"
-               "exceeds this machine's memory is refused (exit 2) with the estimate in the message.\n");
+               "grid, the time-step bounds and frames; then steps the world for about a second (the probe)\n"
+               "and estimates what `sandmpm run SCENE` will cost: run time (a range of steps times the\n"
+               "probe's seconds per particle-step), disk (frames and kept checkpoints) and peak memory.\n"
+               "A scene whose memory estimate exceeds this machine's memory is refused (exit 2) with the\n"
+               "estimate in the message. docs/outputs.md, \"What a run costs\", says how each is estimated.\n");
 }
 
 void cli_usage_render(FILE *f) {

@@ -6,7 +6,8 @@
 # output directory; a missing run directory gives exit code 4; `render` turns a run into PNG
 # files; `bench`.
 # PART faults (CTest test_cli_faults): hostile and careless input and disk trouble, see
-# tests/test_cli_faults.sh. Without PART: both.
+# tests/test_cli_faults.sh. PART info (CTest test_cli_info): `info`'s estimates against a run, see
+# tests/test_cli_info.sh. Without PART: basic and faults.
 set -u
 BIN=$(cd "$(dirname "$1")" && pwd)/$(basename "$1") # absolute: some tests run in other folders
 SRC=$2
@@ -28,6 +29,12 @@ has() { # file text description
     if grep -qF -- "$2" "$1"; then ok; else bad "$3: \"$2\" not in: $(head -c 400 "$1")"; fi
 }
 
+if [ "$PART" = info ]; then
+    . "$SRC/tests/test_cli_info.sh"
+    echo "test_cli (info): $pass passed, $fail failed"
+    [ "$fail" -eq 0 ]
+    exit
+fi
 if [ "$PART" = faults ]; then
     . "$SRC/tests/test_cli_faults.sh"
     echo "test_cli (faults): $pass passed, $fail failed"

@@ -494,7 +494,51 @@ static void test_colliders(void) {
     free(img2);
 }
 
-/* 2D: disks of known radius cover their area; colliders and ground drawn. */
+/* A block of 2D sand, 0.4 x 0.2 m on a square lattice of spacing s (V = s^2; 5 mm: 4 particles per
+ * 1 cm cell, 1.5 pixels apart; 2 cm: 5.8 pixels apart): no background pixel inside it (its outline
+ * less a pixel and a half). */
+static void test_2d_packed(sm_render_opts *o, const uint8_t *bg, uint8_t *img, double s) {
+    const double x0 = 0.3, y0 = 0.1;
+    const int nx = (int)lround(0.4 / s), ny = (int)lround(0.2 / s);
+    sm_frame f;
+    memset(&f, 0, sizeof f);
+    f.dim = 2;
+    f.n = (size_t)(nx * ny);
+    f.x = calloc(3 * f.n, sizeof(float));
+    f.v = calloc(3 * f.n, sizeof(float));
+    f.q = calloc(f.n, sizeof(float));
+    f.material = calloc(f.n, sizeof(uint16_t));
+    f.volume = calloc(f.n, sizeof(float));
+    for (int j = 0; j < ny; j++)
+        for (int i = 0; i < nx; i++) {
+            const size_t k = (size_t)(j * nx + i);
+            f.x[3 * k] = (float)(x0 + (i + 0.5) * s);
+            f.x[3 * k + 1] = (float)(y0 + (j + 0.5) * s);
+            f.volume[k] = (float)(s * s);
+        }
+    o->colliders = NULL;
+    o->ncolliders = 0;
+    o->ground = SM_GROUND_NONE;
+    CHECK(render(&f, o, img) == SM_OK);
+    /* the view as in test_2d: x in [-0.05, 1.05], y in [-0.1625, 0.6625] (0.825 m high) */
+    const double px = H / 0.825, m = 1.5 / px;
+    long inside = 0, sky = 0;
+    for (int py = 0; py < H; py++)
+        for (int pxl = 0; pxl < W; pxl++) {
+            const double x = -0.05 + (pxl + 0.5) / px, y = 0.6625 - (py + 0.5) / px;
+            if (x < x0 + m || x > x0 + nx * s - m || y < y0 + m || y > y0 + ny * s - m) continue;
+            inside++;
+            sky += !memcmp(img + 3 * (py * W + pxl), bg + 3 * (py * W + pxl), 3);
+        }
+    printf("2D packed sand, spacing %g m: %ld of %ld pixels inside the block show the background\n", s, sky, inside);
+    CHECK(inside > 1000);
+    CHECK(sky == 0);
+    sm_frame_free(&f);
+}
+
+/* 2D: a particle of area V is a disk of radius sqrt(V / 2) (the circle around its square); ten
+ * apart cover that area; packed sand (a square lattice of spacing s, V = s^2) leaves no background
+ * inside the block; colliders and ground drawn. */
 static void test_2d(void) {
     sm_frame f;
     memset(&f, 0, sizeof f);
@@ -509,7 +553,7 @@ static void test_2d(void) {
     for (int i = 0; i < 10; i++) {
         f.x[3 * i] = (float)(0.05 + 0.1 * i);
         f.x[3 * i + 1] = (float)(0.1 + 0.03 * i);
-        f.volume[i] = (float)(PI_T * r * r);
+        f.volume[i] = (float)(2 * r * r);
     }
     sm_render_opts o = sm_render_opts_default();
     o.width = W;
@@ -549,6 +593,8 @@ static void test_2d(void) {
     double g2 = foreground_fraction(img2, bg, W, H);
     CHECK(g2 > got + 0.02 && g2 < 0.6); /* walls and ground added, the inside stays free */
     sm_frame_free(&f);
+    test_2d_packed(&o, bg, img, 0.005);
+    test_2d_packed(&o, bg, img, 0.02);
     free(img);
     free(img2);
     free(bg);

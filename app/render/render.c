@@ -214,7 +214,11 @@ static void scene_box(const sm_frame *f, const sm_render_opts *o, int threads, d
     }
 }
 
-/* Radius setup: per-particle from volume, constant, or estimated. *rmax_out: the largest radius. */
+/* Radius setup: per-particle from volume, constant, or estimated. *rmax_out: the largest radius.
+ * 3D: the sphere of the particle's volume, r = (3V / 4 pi)^(1/3) (the layers behind fill the gaps).
+ * 2D: the disk circumscribing the particle's square of area V, r = sqrt(V / 2): disks of the
+ * equal area (r = sqrt(V / pi)) leave sky between packed grains (at the centre of each square of
+ * four neighbours, 0.354 spacing from each, beyond their 0.282). */
 static sm_status setup_radii(rctx *R, float **owned, double *rmax_out) {
     const sm_frame *f = R->f;
     const sm_render_opts *o = R->o;
@@ -235,7 +239,7 @@ static sm_status setup_radii(rctx *R, float **owned, double *rmax_out) {
 OMP(omp parallel for schedule(static) num_threads(R->threads) reduction(max : rmax))
         for (long i = 0; i < n; i++) {
             double V = f->volume[i];
-            double rr = V > 0 && isfinite(V) ? (d3 ? cbrt(3.0 * V / (4.0 * PI_D)) : sqrt(V / PI_D)) * scale : NAN;
+            double rr = V > 0 && isfinite(V) ? (d3 ? cbrt(3.0 * V / (4.0 * PI_D)) : sqrt(0.5 * V)) * scale : NAN;
             r[i] = (float)rr;
             if (rr > rmax) rmax = rr;
         }

@@ -46,6 +46,7 @@ typedef struct sm_scene_settings {
     int checkpoint_every;           /* `checkpoint_every` (frames, 0: none), or -1 if not given */
     double end_time;                /* = frames / fps, s */
     int out_ply, out_vtk, out_csv;  /* the outputs table; defaults all 1 */
+    int out_z_up;                   /* outputs.up = "z": frames written z-up, (x, y, z) -> (x, -z, y) */
     size_t estimated_particles;     /* particles the objects will seed (before seeding) */
     size_t estimated_emitted;       /* particles the emitters will add up to end_time */
     size_t estimated_bytes;         /* grid + (seeded + emitted) particles */

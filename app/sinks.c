@@ -104,12 +104,12 @@ static sm_status drop_state(sm_sink *s, sm_status st) {
 
 static sm_status ply_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t errlen) {
     char path[SM_PATH_MAX];
-    (void)s;
     sm_status st = frame_path(path, sizeof path, fr->out_dir, fr->frame, "ply", err, errlen);
-    return st == SM_OK ? sm_write_ply(fr->w, path, err, errlen) : st;
+    const int *z_up = s->config;
+    return st == SM_OK ? sm_write_ply(fr->w, path, z_up && *z_up, err, errlen) : st;
 }
 
-sm_sink sm_sink_ply(void) { return (sm_sink){"ply", NULL, NULL, NULL, ply_frame, NULL}; }
+sm_sink sm_sink_ply(const int *z_up) { return (sm_sink){"ply", z_up, NULL, NULL, ply_frame, NULL}; }
 
 /* ------------------------------------------------------------------------------------------ */
 /* vtk                                                                                          */
@@ -162,7 +162,8 @@ static sm_status vtk_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t
     }
     v->times[v->count++] = fr->d->time;
     sm_status st = join(path, sizeof path, fr->out_dir, name, err, errlen);
-    if (st == SM_OK) st = sm_write_vtp(fr->w, path, err, errlen);
+    const int *z_up = s->config;
+    if (st == SM_OK) st = sm_write_vtp(fr->w, path, z_up && *z_up, err, errlen);
     if (st == SM_OK) st = join(path, sizeof path, fr->out_dir, "frames.pvd", err, errlen);
     if (st == SM_OK) st = sm_write_pvd(path, (const char *const *)v->names, v->times, v->count, err, errlen);
     return st;
@@ -177,7 +178,7 @@ static sm_status vtk_end(sm_sink *s, sm_status run_status, char *err, size_t err
     return drop_state(s, SM_OK);
 }
 
-sm_sink sm_sink_vtk(void) { return (sm_sink){"vtk", NULL, NULL, vtk_begin, vtk_frame, vtk_end}; }
+sm_sink sm_sink_vtk(const int *z_up) { return (sm_sink){"vtk", z_up, NULL, vtk_begin, vtk_frame, vtk_end}; }
 
 /* ------------------------------------------------------------------------------------------ */
 /* manifest                                                                                     */

@@ -30,8 +30,9 @@ typedef struct sm_png_sink_config {
     int threads; /* 0 = OpenMP's default */
 } sm_png_sink_config;
 
-sm_sink sm_sink_ply(void);
-sm_sink sm_sink_vtk(void);
+/* Frames as PLY / VTK (.vtp and frames.pvd); *z_up (NULL: 0): written z-up (app/io/fields.h). */
+sm_sink sm_sink_ply(const int *z_up);
+sm_sink sm_sink_vtk(const int *z_up);
 sm_sink sm_sink_manifest(const sm_manifest_camera *camera);
 sm_sink sm_sink_png(const sm_png_sink_config *config);
 sm_sink sm_sink_csv(void);

@@ -130,8 +130,8 @@ static void choose_sinks(const run_args *a, const sm_scene_settings *st, run_out
     o->progress.quiet = a->quiet;
     o->progress.verbose = a->verbose;
     o->nsinks = 0;
-    if (st->out_ply || a->render) o->sinks[o->nsinks++] = sm_sink_ply(); /* `render` reads them later */
-    if (st->out_vtk) o->sinks[o->nsinks++] = sm_sink_vtk();
+    if (st->out_ply || a->render) o->sinks[o->nsinks++] = sm_sink_ply(&st->out_z_up); /* `render` reads them later */
+    if (st->out_vtk) o->sinks[o->nsinks++] = sm_sink_vtk(&st->out_z_up);
     o->sinks[o->nsinks++] = sm_sink_manifest(&o->camera);
     if (a->render) o->sinks[o->nsinks++] = sm_sink_png(&o->png);
     if (st->out_csv) o->sinks[o->nsinks++] = sm_sink_csv();

@@ -140,6 +140,20 @@ expect 4 "render missing dir" "$BIN" render "$TMP/no_such_run"
 mkdir -p "$TMP/corrupt" && printf 'ply\nformat binary_little_endian 1.0\nelement vertex 100\nproperty float x\nend_header\n' > "$TMP/corrupt/frame_0000.ply"
 expect 2 "render corrupt frame" "$BIN" render "$TMP/corrupt"
 
+# outputs.up = "z": the frames say so and hold (x, -z, y); `render` turns them back, so the images
+# are those of the y-up run, byte for byte; a bad value is refused with the choices.
+for up in y z; do
+    printf 'return {\n  dim = 3, dx = 0.04, ppc = 2, frames = 1,\n  domain = { min = {0, 0, 0}, max = {1, 0.6, 0.8} },\n  materials = { sand = { model = "sand", friction_angle = 30 } },\n  objects = { { shape = { type = "box", center = {0.5, 0.3, 0.4}, size = {0.3, 0.2, 0.2} }, material = "sand", velocity = {0.5, 0, 0.3} } },\n  outputs = { up = "%s" },\n}\n' "$up" > "$TMP/up_$up.lua"
+    expect 0 "run with outputs.up = $up" "$BIN" run "$TMP/up_$up.lua" --out "$TMP/up_$up"
+    has "$TMP/up_$up/frame_0001.ply" "comment up $up" "outputs.up = $up: the PLY header says it"
+    expect 0 "render the run with outputs.up = $up" "$BIN" render "$TMP/up_$up" --size 160x90
+done
+cmp -s "$TMP/up_y/frame_0001.ply" "$TMP/up_z/frame_0001.ply" && bad "outputs.up: the z-up frame is the y-up one" || ok
+cmp -s "$TMP/up_y/frame_0001.png" "$TMP/up_z/frame_0001.png" && ok || bad "render of a z-up run's frames differs from the y-up run's"
+sed 's/up = "z"/up = "x"/' "$TMP/up_z.lua" > "$TMP/up_x.lua"
+expect 2 "outputs.up = x" "$BIN" info "$TMP/up_x.lua"
+has "$TMP/err" '"y"' "outputs.up = x: the choices named"
+
 # Output folders cannot mix runs (docs/outputs.md): run_manifest.txt names the scene, its hash and
 # the frames written; a re-run of the same scene replaces its files; another run (here the same
 # file with another --set value) is refused (exit 2, the folder untouched) unless --overwrite,

@@ -91,7 +91,7 @@ static void child_atomic(void) {
     sm_world *w = small_world();
     CHECK(w != NULL);
     if (!w) return;
-    CHECK(sm_write_ply(w, p, err, sizeof err) == SM_ERR_IO);
+    CHECK(sm_write_ply(w, p, 0, err, sizeof err) == SM_ERR_IO);
     CHECK(strstr(err, p) != NULL && strstr(err, "No space left on device") != NULL);
     CHECK(same_text(p, "the previous frame\n"));
     CHECK(sm_temp_name(tmp, sizeof tmp, p, (long)getpid()) == 0 && file_size(tmp) < 0);

@@ -85,7 +85,7 @@ static sm_world *make(int dim) {
 /* Reads a PLY frame written from w into f. */
 static void write_read(const sm_world *w, const char *path, sm_frame *f) {
     char err[512];
-    CHECK(sm_write_ply(w, path, err, sizeof err) == SM_OK);
+    CHECK(sm_write_ply(w, path, 0, err, sizeof err) == SM_OK);
     CHECK(sm_ply_read(path, f, err, sizeof err) == SM_OK);
 }
 
@@ -214,6 +214,51 @@ static void test_run_manifest(void) {
     CHECK(system(cmd) == 0);
 }
 
+/* outputs.up = "z": the same file but "comment up z" and positions and velocities (x, -z, y); the
+ * frame reader turns them back: the frame read equals the y-up file's. */
+static void check_z_up(const sm_world *w, const char *yup, int dim) {
+    char err[512];
+    const char *zup = dim == 2 ? "test_output_zup_2d.ply" : "test_output_zup_3d.ply";
+    CHECK(sm_write_ply(w, zup, 1, err, sizeof err) == SM_OK);
+    size_t ly = 0, lz = 0;
+    unsigned char *by = slurp(yup, &ly), *bz = slurp(zup, &lz);
+    CHECK(by && bz && ly == lz);
+    if (!by || !bz || ly != lz) {
+        free(by), free(bz);
+        return;
+    }
+    const char *hy = strstr((const char *)by, "comment up y\n"), *hz = strstr((const char *)bz, "comment up z\n");
+    CHECK(hy != NULL && hz != NULL && hy - (const char *)by == hz - (const char *)bz);
+    const size_t hl = (size_t)(strstr((const char *)by, "end_header\n") - (const char *)by) + strlen("end_header\n");
+    size_t bad = 0, n = (ly - hl) / 46;
+    for (size_t k = 0; k < n; k++) {
+        const unsigned char *ry = by + hl + 46 * k, *rz = bz + hl + 46 * k;
+        for (int o = 0; o < 24; o += 12) { /* position, velocity */
+            bad += f32(rz + o) != f32(ry + o);
+            bad += f32(rz + o + 4) != -f32(ry + o + 8);
+            bad += f32(rz + o + 8) != f32(ry + o + 4);
+        }
+        bad += memcmp(rz + 24, ry + 24, 22) != 0;
+    }
+    printf("%dD z-up PLY: %zu records, %zu differences from (x, -z, y)\n", dim, n, bad);
+    CHECK(n > 0 && bad == 0);
+    sm_frame fy, fz;
+    CHECK(sm_ply_read(yup, &fy, err, sizeof err) == SM_OK);
+    CHECK(sm_ply_read(zup, &fz, err, sizeof err) == SM_OK);
+    CHECK(fy.n == fz.n && fy.dim == fz.dim && fz.dim == dim);
+    for (size_t i = 0; i < fy.n && fy.n == fz.n; i++)
+        for (int a = 0; a < 3; a++) {
+            bad += fy.x[3 * i + a] != fz.x[3 * i + a];
+            bad += fy.v[3 * i + a] != fz.v[3 * i + a];
+        }
+    CHECK(bad == 0);
+    sm_frame_free(&fy);
+    sm_frame_free(&fz);
+    free(by);
+    free(bz);
+    remove(zup);
+}
+
 int main(void) {
     for (int dim = 2; dim <= 3; dim++) {
         sm_world *w = make(dim);
@@ -236,8 +281,8 @@ int main(void) {
         char err[512];
         const char *ply = dim == 2 ? "test_output_2d.ply" : "test_output_3d.ply";
         const char *vtp = dim == 2 ? "test_output_2d.vtp" : "test_output_3d.vtp";
-        CHECK(sm_write_ply(w, ply, err, sizeof err) == SM_OK);
-        CHECK(sm_write_vtp(w, vtp, err, sizeof err) == SM_OK);
+        CHECK(sm_write_ply(w, ply, 0, err, sizeof err) == SM_OK);
+        CHECK(sm_write_vtp(w, vtp, 0, err, sizeof err) == SM_OK);
         char tmpname[256];
         CHECK(sm_temp_name(tmpname, sizeof tmpname, ply, (long)getpid()) == 0);
         FILE *t = fopen(tmpname, "rb");
@@ -254,7 +299,7 @@ int main(void) {
         char expect_hdr[1024];
         snprintf(expect_hdr, sizeof expect_hdr,
                  "ply\nformat binary_little_endian 1.0\ncomment sandmpm %s\ncomment dim %d\n"
-                 "comment domain %.9g %.9g %.9g %.9g %.9g %.9g\nelement vertex %zu\n"
+                 "comment domain %.9g %.9g %.9g %.9g %.9g %.9g\ncomment up y\nelement vertex %zu\n"
                  "property float x\nproperty float y\nproperty float z\n"
                  "property float vx\nproperty float vy\nproperty float vz\n"
                  "property ushort material\nproperty float q\nproperty float friction_angle\nproperty float Je\n"
@@ -286,6 +331,7 @@ int main(void) {
         }
         CHECK(bad == 0);
         free(b);
+        check_z_up(w, ply, dim);
 
         /* --- VTP --- */
         b = slurp(vtp, &len);
@@ -353,7 +399,7 @@ int main(void) {
         CHECK(b && strstr((char *)b, "timestep=\"0.5\"") && strstr((char *)b, "file=\"b.vtp\""));
         free(b);
         /* Unwritable path: an error message, no crash. */
-        CHECK(sm_write_ply(w, "/nonexistent-dir/x.ply", err, sizeof err) == SM_ERR_IO);
+        CHECK(sm_write_ply(w, "/nonexistent-dir/x.ply", 0, err, sizeof err) == SM_ERR_IO);
         CHECK(strstr(err, "No such file or directory") != NULL); /* the reason */
         CHECK(strstr(err, "/nonexistent-dir/x.ply") != NULL);
         printf("%dD: %zu particles written and read back in id order (%zu not at their id's index in storage; PLY %zu "

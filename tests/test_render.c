@@ -657,7 +657,7 @@ static void test_ply_roundtrip(int dim) {
     if (!w) return;
     char path[512], err[512];
     tmp_path(path, sizeof path, dim == 3 ? "rt3.ply" : "rt2.ply");
-    CHECK(sm_write_ply(w, path, err, sizeof err) == SM_OK);
+    CHECK(sm_write_ply(w, path, 0, err, sizeof err) == SM_OK);
     sm_frame f;
     CHECK(sm_ply_read(path, &f, err, sizeof err) == SM_OK);
     sm_particles_view pv;

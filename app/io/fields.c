@@ -55,3 +55,9 @@ size_t *sm_out_id_order(const sm_particles_view *pv) {
     }
     return order;
 }
+
+void sm_out_to_z_up(sm_out_particle *r) {
+    const float y = r->x[1], vy = r->v[1];
+    r->x[1] = -r->x[2], r->x[2] = y;
+    r->v[1] = -r->v[2], r->v[2] = vy;
+}

@@ -23,6 +23,12 @@ typedef struct sm_out_particle {
 /* The fields of particle i (storage index) of the view pv of world w. */
 void sm_out_particle_get(const sm_world *w, const sm_particles_view *pv, size_t i, sm_out_particle *r);
 
+/* Frame files are y-up (sandmpm's axes, the thesis's) unless written z-up (scene outputs.up = "z",
+ * for Blender, Houdini's z-up setups, GIS): position and velocity (x, y, z) -> (x, -z, y), a
+ * rotation by +90 degrees about x (up stays up, handedness kept). The PLY header says which
+ * ("comment up y|z"); its "comment domain" stays in sandmpm's y-up axes. */
+void sm_out_to_z_up(sm_out_particle *r);
+
 /* The storage indices of the view's particles in increasing id order: a malloc'd array of pv->n
  * (free it), or NULL if out of memory. O(n) when the ids are 0..n-1 (the library's: no particle is
  * ever removed), else a sort. */

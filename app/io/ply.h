@@ -22,8 +22,9 @@ sm_status sm_ply_read(const char *path, sm_frame *f, char *err, size_t errlen);
  * x y z, vx vy vz, ushort material, float q, friction_angle (degrees), Je (det F^E), volume (V0,
  * m^3; m^2 in 2D), uint id (the stable particle id); vertices in increasing id order
  * (app/io/fields.h), so vertex k is the same grain in every frame; header comments "sandmpm
- * VERSION", "dim D" and "domain x0 y0 z0 x1 y1 z1". Returns SM_OK, SM_ERR_NOMEM or SM_ERR_IO with
- * a message in err. */
-sm_status sm_write_ply(const sm_world *w, const char *path, char *err, size_t errlen);
+ * VERSION", "dim D", "domain x0 y0 z0 x1 y1 z1" (sandmpm's y-up axes) and "up y|z"; z_up: positions
+ * and velocities z-up (app/io/fields.h, sm_out_to_z_up). Returns SM_OK, SM_ERR_NOMEM or SM_ERR_IO
+ * with a message in err. */
+sm_status sm_write_ply(const sm_world *w, const char *path, int z_up, char *err, size_t errlen);
 
 #endif

@@ -131,12 +131,15 @@ static sm_status malformed(const line_ctx *c, const char *keyword) {
     return line_error(c, "malformed \"%.60s\" line", keyword);
 }
 
-/* "comment dim 2|3" and "comment domain x0 y0 z0 x1 y1 z1" are ours; other comments are skipped. */
+/* "comment dim 2|3", "comment domain x0 y0 z0 x1 y1 z1" and "comment up y|z" are ours; other
+ * comments are skipped. */
 static void parse_comment(ply_header *h, const char *rest) {
     int d;
     double a[6];
     char extra;
     if (sscanf(rest, " dim %d %c", &d, &extra) == 1 && (d == 2 || d == 3)) h->comment_dim = d;
+    char up[2];
+    if (sscanf(rest, " up %1[yz] %c", up, &extra) == 1) h->z_up = up[0] == 'z';
     if (sscanf(rest, " domain %lf %lf %lf %lf %lf %lf", &a[0], &a[1], &a[2], &a[3], &a[4], &a[5]) == 6) {
         int ok = 1;
         for (int k = 0; k < 6; k++) ok = ok && isfinite(a[k]);

@@ -50,6 +50,7 @@ typedef struct ply_header {
     int field[F_COUNT];     /* index of each kept field among the vertex properties, or -1 */
     int comment_dim;        /* from "comment dim 2|3", else 0 */
     int has_domain;         /* from "comment domain x0 y0 z0 x1 y1 z1" */
+    int z_up;               /* "comment up z": positions and velocities written z-up */
     double domain[6];
 } ply_header;
 

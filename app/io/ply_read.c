@@ -277,8 +277,14 @@ static sm_status read_ascii(FILE *fp, unsigned long long fsize, const char *path
 /* ------------------------------------------------------------------------------------------ */
 /* The frame                                                                                    */
 
-/* has_*, the dimension (from the header, else from z) and the domain. */
+/* has_*, the dimension (from the header, else from z) and the domain; a z-up file's positions and
+ * velocities turned back to sandmpm's y-up axes, (X, Y, Z) -> (X, Z, -Y) (app/io/fields.h). */
 static void finish_frame(const ply_header *h, sm_frame *f) {
+    for (size_t i = 0; h->z_up && i < f->n; i++) {
+        float *x = f->x + 3 * i, *v = f->v + 3 * i, y = x[1], vy = v[1];
+        x[1] = x[2], x[2] = -y;
+        v[1] = v[2], v[2] = -vy;
+    }
     f->has_velocity = h->field[F_VX] >= 0 || h->field[F_VY] >= 0 || h->field[F_VZ] >= 0;
     f->has_q = h->field[F_Q] >= 0;
     f->has_material = h->field[F_MAT] >= 0;

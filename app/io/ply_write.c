@@ -36,7 +36,7 @@ static void put_record(unsigned char *rec, const sm_out_particle *r) {
     put_u32(rec + 42, r->id);
 }
 
-sm_status sm_write_ply(const sm_world *w, const char *path, char *err, size_t errlen) {
+sm_status sm_write_ply(const sm_world *w, const char *path, int z_up, char *err, size_t errlen) {
     sm_particles_view pv;
     sm_world_particles(w, &pv);
     size_t *order = sm_out_id_order(&pv);
@@ -53,17 +53,18 @@ sm_status sm_write_ply(const sm_world *w, const char *path, char *err, size_t er
     const sm_world_def *def = sm_world_get_def(w);
     fprintf(a.f,
             "ply\nformat binary_little_endian 1.0\ncomment sandmpm %s\ncomment dim %d\n"
-            "comment domain %.9g %.9g %.9g %.9g %.9g %.9g\nelement vertex %zu\n"
+            "comment domain %.9g %.9g %.9g %.9g %.9g %.9g\ncomment up %c\nelement vertex %zu\n"
             "property float x\nproperty float y\nproperty float z\n"
             "property float vx\nproperty float vy\nproperty float vz\n"
             "property ushort material\nproperty float q\nproperty float friction_angle\nproperty float Je\n"
             "property float volume\nproperty uint id\nend_header\n",
             sm_version(), pv.dim, def->domain_min[0], def->domain_min[1], def->domain_min[2], def->domain_max[0],
-            def->domain_max[1], def->domain_max[2], pv.n);
+            def->domain_max[1], def->domain_max[2], z_up ? 'z' : 'y', pv.n);
     unsigned char rec[PLY_RECORD_BYTES];
     for (size_t k = 0; k < pv.n && !ferror(a.f); k++) {
         sm_out_particle r;
         sm_out_particle_get(w, &pv, order[k], &r);
+        if (z_up) sm_out_to_z_up(&r);
         put_record(rec, &r);
         fwrite(rec, sizeof rec, 1, a.f);
     }

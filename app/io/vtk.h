@@ -10,8 +10,10 @@
 /* Writes the particles as VTK XML PolyData (.vtp, raw appended little-endian, UInt64 headers),
  * atomically: points, a vertex cell per particle, and point arrays velocity, material, q,
  * friction_angle, Je, volume, id (UInt32, the stable particle id) in that order in the appended
- * block (then Points, connectivity, offsets); points in increasing id order (app/io/fields.h). Returns SM_OK, SM_ERR_NOMEM or SM_ERR_IO, with a message in err. */
-sm_status sm_write_vtp(const sm_world *w, const char *path, char *err, size_t errlen);
+ * block (then Points, connectivity, offsets); points in increasing id order (app/io/fields.h);
+ * z_up: points and velocities z-up (sm_out_to_z_up). Returns SM_OK, SM_ERR_NOMEM or SM_ERR_IO, with
+ * a message in err. */
+sm_status sm_write_vtp(const sm_world *w, const char *path, int z_up, char *err, size_t errlen);
 
 /* Writes a ParaView collection (.pvd) atomically, listing count files (relative names) with their
  * times. SM_OK or SM_ERR_IO with a message. */

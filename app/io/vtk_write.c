@@ -31,7 +31,7 @@ static void arrays_free(vtp_arrays *a) {
     free(a->offs);
 }
 
-static int arrays_fill(vtp_arrays *a, const sm_world *w, const sm_particles_view *pv) {
+static int arrays_fill(vtp_arrays *a, const sm_world *w, const sm_particles_view *pv, int z_up) {
     const size_t n = pv->n, m = n ? n : 1;
     a->xyz = malloc(m * 3 * sizeof(float));
     a->vel = malloc(m * 3 * sizeof(float));
@@ -52,6 +52,7 @@ static int arrays_fill(vtp_arrays *a, const sm_world *w, const sm_particles_view
     for (size_t i = 0; i < n; i++) {
         sm_out_particle r;
         sm_out_particle_get(w, pv, order[i], &r);
+        if (z_up) sm_out_to_z_up(&r);
         memcpy(a->xyz + 3 * i, r.x, sizeof r.x);
         memcpy(a->vel + 3 * i, r.v, sizeof r.v);
         a->q[i] = r.q;
@@ -111,13 +112,13 @@ static void write_vtp(FILE *f, const vtp_arrays *a, size_t n) {
     fprintf(f, "\n</AppendedData>\n</VTKFile>\n");
 }
 
-sm_status sm_write_vtp(const sm_world *w, const char *path, char *err, size_t errlen) {
+sm_status sm_write_vtp(const sm_world *w, const char *path, int z_up, char *err, size_t errlen) {
     sm_particles_view pv;
     sm_world_particles(w, &pv);
     vtp_arrays arr;
     memset(&arr, 0, sizeof arr);
     sm_status st = SM_OK;
-    if (!arrays_fill(&arr, w, &pv)) {
+    if (!arrays_fill(&arr, w, &pv, z_up)) {
         snprintf(err, errlen, "%s: out of memory", path);
         st = SM_ERR_NOMEM;
     }

@@ -18,7 +18,8 @@ static const char *const keys_top[] = {"dim", "dx", "ppc", "kernel", "transfer",
                                        "static_friction_sticks", "particle_projection", "materials", "objects",
                                        "colliders", "emitters", "outputs", "camera"};
 static const char *const keys_domain[] = {"min", "max", "walls", "wall_friction"};
-static const char *const keys_out[] = {"ply", "vtk", "csv"};
+static const char *const keys_out[] = {"ply", "vtk", "csv", "up"};
+static const char *const up_names[] = {"y", "z"};
 static const char *const keys_cam[] = {"eye", "target", "up", "fov"};
 static const char *const kernel_names[] = {"quadratic", "cubic"};
 static const char *const transfer_names[] = {"apic", "pic", "flip"};
@@ -114,6 +115,7 @@ static void parse_domain(vctx *v, int top) {
 static void parse_outputs(vctx *v, int top) {
     sm_scene_settings *set = &v->s->set;
     set->out_ply = set->out_vtk = set->out_csv = 1;
+    set->out_z_up = 0;
     if (!sc_table_field(v, top, "outputs")) return;
     size_t old = sc_push_key(v, "outputs");
     int ot = lua_gettop(v->L);
@@ -121,6 +123,7 @@ static void parse_outputs(vctx *v, int top) {
     set->out_ply = sc_bool_field(v, ot, "ply", 1);
     set->out_vtk = sc_bool_field(v, ot, "vtk", 1);
     set->out_csv = sc_bool_field(v, ot, "csv", 1);
+    set->out_z_up = sc_enum_field(v, ot, "up", up_names, 2, 0);
     lua_pop(v->L, 1);
     sc_pop_key(v, old);
 }

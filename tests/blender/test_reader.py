@@ -17,23 +17,25 @@ PROPS = [("x", "float", "f"), ("y", "float", "f"), ("z", "float", "f"), ("vx", "
 ROWS = [(0.1, 0.2, 0.3, 1.0, -2.0, 0.5, 1, 0.25, 1e-6, 7), (-0.5, 0.75, 0.0, 0.0, 0.0, -1.0, 0, 0.0, 8e-6, 3)]
 
 
-def write_ply(path, fmt, dim=3, extra_element=False):
+def write_ply(path, fmt, dim=3, extra_element=False, up=None, rows=ROWS):
     head = ["ply", f"format {fmt} 1.0", "comment sandmpm test", f"comment dim {dim}"]
+    if up:
+        head += [f"comment up {up}"]
     if extra_element:
         head += ["element camera 1", "property float fov"]
-    head += [f"element vertex {len(ROWS)}"] + [f"property {t} {n}" for n, t, _ in PROPS] + ["end_header"]
+    head += [f"element vertex {len(rows)}"] + [f"property {t} {n}" for n, t, _ in PROPS] + ["end_header"]
     with open(path, "wb") as f:
         f.write(("\n".join(head) + "\n").encode())
         if fmt == "ascii":
             if extra_element:
                 f.write(b"45\n")
-            for r in ROWS:
+            for r in rows:
                 f.write((" ".join(repr(v) for v in r) + "\n").encode())
         else:
             o = "<" if fmt == "binary_little_endian" else ">"
             if extra_element:
                 f.write(struct.pack(o + "f", 45.0))
-            for r in ROWS:
+            for r in rows:
                 f.write(struct.pack(o + "".join(c for _, _, c in PROPS), *r))
 
 
@@ -61,6 +63,21 @@ def test_z_up_and_attributes(tmp_path):
     np.testing.assert_allclose(attrs["radius"][1][1], (3 * 8e-6 / (4 * math.pi)) ** (1 / 3), rtol=1e-6)
     pos_y, _ = si.frame_arrays(str(p), z_up=False)
     np.testing.assert_allclose(pos_y[0], [0.1, 0.2, 0.3], rtol=1e-6)
+
+
+def test_frames_written_z_up(tmp_path):
+    """A run with outputs.up = "z" wrote (x, -z, y): imported z-up it lands where a y-up file does."""
+    zrows = [(r[0], -r[2], r[1], r[3], -r[5], r[4]) + r[6:] for r in ROWS]
+    py, pz = tmp_path / "y.ply", tmp_path / "z.ply"
+    write_ply(py, "binary_little_endian", up="y")
+    write_ply(pz, "binary_little_endian", up="z", rows=zrows)
+    for z_up in (True, False):
+        a, va = si.frame_arrays(str(py), z_up=z_up)
+        b, vb = si.frame_arrays(str(pz), z_up=z_up)
+        np.testing.assert_allclose(a, b, rtol=1e-6)
+        np.testing.assert_allclose(va["velocity"][1], vb["velocity"][1], rtol=1e-6)
+    pos, _ = si.frame_arrays(str(pz), z_up=True)
+    np.testing.assert_allclose(pos[0], [0.1, -0.3, 0.2], rtol=1e-6)
 
 
 def test_2d_radius_is_a_disk(tmp_path):

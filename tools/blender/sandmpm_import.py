@@ -10,7 +10,8 @@ What it builds (Blender 3.4, its own Python API; no other module than NumPy, whi
     file's vx vy vz), q, material, friction_angle, Je, volume, id when the file has it, and radius
     (the radius of a sphere, or in 2D a disk, of the particle's volume) for rendering;
   - y-up (sandmpm, the thesis) to z-up (Blender): (x, y, z) -> (x, -z, y), for positions and
-    velocities; off with z_up=False;
+    velocities; off with z_up=False; frames a run wrote z-up (outputs.up = "z", "comment up z")
+    are recognised and not turned twice;
   - a geometry-nodes modifier that instances an icosphere of the particle's radius on every vertex
     (scaled by radius_scale), with one material, so the cloud renders in Eevee and Cycles.
 
@@ -166,8 +167,11 @@ def particle_radius(volume, dim):
     return np.sqrt(v / math.pi)
 
 
-def to_blender_axes(x, y, z, z_up):
-    """sandmpm's y-up coordinates to Blender's z-up: (x, y, z) -> (x, -z, y)."""
+def to_blender_axes(x, y, z, z_up, file_z_up=False):
+    """sandmpm's y-up coordinates to Blender's z-up: (x, y, z) -> (x, -z, y). A frame written z-up
+    (scene outputs.up = "z", header "comment up z") is first turned back: (X, Y, Z) -> (X, Z, -Y)."""
+    if file_z_up:
+        x, y, z = x, z, -y
     if not z_up:
         return x, y, z
     return x, -z, y
@@ -183,10 +187,11 @@ def frame_arrays(path, z_up=True):
     n = len(f["x"])
     zero = np.zeros(n, dtype=np.float32)
     dim = run_dim(comments, f)
-    pos = np.stack(to_blender_axes(f["x"], f["y"], f.get("z", zero), z_up), axis=1).astype(np.float32)
+    file_z = "up z" in comments
+    pos = np.stack(to_blender_axes(f["x"], f["y"], f.get("z", zero), z_up, file_z), axis=1).astype(np.float32)
     attrs = {}
     if "vx" in f:
-        vel = to_blender_axes(f["vx"], f["vy"], f.get("vz", zero), z_up)
+        vel = to_blender_axes(f["vx"], f["vy"], f.get("vz", zero), z_up, file_z)
         attrs["velocity"] = ("FLOAT_VECTOR", np.stack(vel, axis=1).astype(np.float32))
     for name, values in f.items():
         if name in ("x", "y", "z", "vx", "vy", "vz"):

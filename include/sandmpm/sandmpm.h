@@ -149,7 +149,7 @@ typedef struct sm_world_def {
     sm_integrator integrator;/**< default SM_INTEGRATOR_EXPLICIT */
     double cfl;              /**< CFL number in (0,1]: no particle moves more than cfl*dx per step. Default 1 (thesis). */
     double max_dt;           /**< largest time step, s. Default 1e-3. */
-    double elastic_cfl;      /**< factor on the elastic-wave bound dt <= elastic_cfl*dx/c, c = sqrt((lambda+2mu)/rho). Default 0.7 (measured limits 0.92 to 2.0: docs/benchmarks.md). 0 disables it. Explicit only: the implicit integrator is not bound by it. */
+    double elastic_cfl;      /**< factor on the elastic-wave bound dt <= elastic_cfl*dx/c, c = sqrt((lambda+2mu)/rho). Default 0.5 (stable to 0.92 and more, but contact friction creeps more above it: docs/benchmarks.md). 0 disables it. Explicit only: the implicit integrator is not bound by it. */
     sm_collide_mode wall_mode;/**< behaviour of the domain walls. Default SM_COLLIDE_SEPARATE. */
     double wall_friction;    /**< Coulomb coefficient of the domain walls. Default 0. */
     int static_friction_sticks; /**< 1 (default): a grid node whose Coulomb friction stops it relative to a

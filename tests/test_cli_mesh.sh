@@ -3,7 +3,7 @@
 # a mesh file that is missing, unreadable, empty of triangles or (for sand) open gives exit code 2
 # with the scene's line and the file named; `info` reports the triangles, the field's size and its
 # build time, then reads the field from the cache; a scene with a mesh collider and a mesh object
-# runs a frame.
+# runs a frame; a mesh emitter emits (an open one is refused).
 set -u
 BIN=$1
 SRC=$2
@@ -96,6 +96,26 @@ parts=$(sed -n 's/^particles *\([0-9]*\) .*/\1/p' "$TMP/out")
 [ "${parts:-0}" -gt 0 ] && ok || bad "mesh object seeded no particles"
 expect 0 "run mesh scene" "$BIN" run "$TMP/bowl.lua" --out "$TMP/run_bowl" --quality test --frames 1
 ls "$TMP/run_bowl" >/dev/null 2>&1 && ok || bad "run mesh scene: no output"
+
+# a mesh emitter: info names its field, a run emits into it; an open mesh cannot be an emitter
+printf 'v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\nf 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n' >"$TMP/cube.obj"
+cat >"$TMP/emit.lua" <<LUA
+return {
+  dx = 0.02, frames = 2,
+  domain = { min = {0, 0, 0}, max = {0.8, 0.6, 0.8} },
+  materials = { sand = { density = 1600, E = 1e5, nu = 0.3, friction_angle = 35 } },
+  emitters = { { shape = { type = "mesh", file = "cube.obj", scale = 0.05, position = {0.4, 0.4, 0.4} },
+                 rate = 5 } },
+}
+LUA
+expect 0 "info mesh emitter" "$BIN" info "$TMP/emit.lua"
+has "$TMP/out" "mesh         emitters[1].shape: cube.obj: 12 triangles; field" "info: emitter mesh"
+expect 0 "run mesh emitter" "$BIN" run "$TMP/emit.lua" --out "$TMP/run_emit" --quality test
+nv=$(sed -n 's/^element vertex \([0-9]*\).*/\1/p' "$(ls "$TMP"/run_emit/frame_*.ply | tail -1)" 2>/dev/null)
+[ "${nv:-0}" -gt 0 ] && ok || bad "mesh emitter: no particles in the last frame"
+sed -e "s/cube.obj\", scale = 0.05/sheet.obj\", scale = 0.5/" "$TMP/emit.lua" >"$TMP/emit_open.lua"
+expect 2 "open mesh emitter" "$BIN" info "$TMP/emit_open.lua"
+has "$TMP/err" "emit_open.lua:5: emitters[1].shape.file:" "open emitter: located"
 
 # 2D: the z = 0 slice of the bowl turned out of the plane (a 3D rotation is allowed for a mesh)
 cat >"$TMP/bowl2d.lua" <<LUA

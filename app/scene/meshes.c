@@ -54,7 +54,6 @@ static void file_field(vctx *v, int t, char *out, size_t n) {
 void sc_parse_mesh_shape(vctx *v, int t, sm_shape *s) {
     sm_scene *sc = v->s;
     sc_check_keys(v, t, keys_mesh, SC_NKEYS(keys_mesh), "a mesh");
-    if (!strncmp(v->path, "emitters", 8)) sc_fail(v, "an emitter's shape cannot be a mesh (use a sphere, box or cylinder)");
     if (sc->nmesh == sc->mesh_cap) {
         int cap = sc->mesh_cap ? 2 * sc->mesh_cap : 4;
         scene_mesh *q = realloc(sc->meshes, (size_t)cap * sizeof *q);
@@ -86,19 +85,20 @@ void sc_parse_mesh_shape(vctx *v, int t, sm_shape *s) {
     m.sign = sc_enum_field(v, t, "sign", sign_names, 3, 0) - 1;
     m.resolution = sc_num_field(v, t, "resolution", 1.0, NULL, 0.25, 1, 8.0, 1);
     m.band = sc_num_field(v, t, "band", 6.0, NULL, 2.0, 1, 64.0, 1);
-    m.solid = !strncmp(v->path, "objects", 7);
+    m.solid = !strncmp(v->path, "objects", 7) || !strncmp(v->path, "emitters", 8);
     sc->meshes[sc->nmesh++] = m;
     s->kind = SM_SHAPE_MESH;
     s->mesh = NULL;
     memcpy(s->center, m.position, sizeof s->center);
 }
 
-/* The shape a mesh key names ("objects[i].shape", "objects[i].clip", "colliders[i].shape",
- * "colliders[i].shapes[j]"), or NULL. */
+/* The shape a mesh key names ("objects[i].shape", "objects[i].clip", "emitters[i].shape",
+ * "colliders[i].shape", "colliders[i].shapes[j]"), or NULL. */
 static sm_shape *shape_at(sm_scene *s, const char *key) {
     int i = 0, j = 0, n = 0;
     if (sscanf(key, "objects[%d].shape%n", &i, &n) == 1 && key[n] == 0 && i >= 1 && i <= s->nobj) return &s->objs[i - 1].shape;
     if (sscanf(key, "objects[%d].clip%n", &i, &n) == 1 && key[n] == 0 && i >= 1 && i <= s->nobj) return &s->objs[i - 1].clip;
+    if (sscanf(key, "emitters[%d].shape%n", &i, &n) == 1 && key[n] == 0 && i >= 1 && i <= s->nemit) return &s->emits[i - 1].shape;
     if (sscanf(key, "colliders[%d].shapes[%d]%n", &i, &j, &n) == 2 && key[n] == 0 && i >= 1 && i <= s->ncol && j >= 1 &&
         j <= s->cols[i - 1].def.shape_count)
         return &s->cols[i - 1].def.shapes[j - 1];

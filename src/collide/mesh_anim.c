@@ -159,6 +159,8 @@ static int frame_at(const sm_mesh_anim *a, double t, double *s, int *moving) {
 
 double sm_mesh_anim_local(const sm_mesh_field *m, double t, const double p[3], double g[3]) {
     if (!m->anim) return sm_mesh_sdf_distance(m->sdf, p, g);
+    double gl[3];
+    if (!g) g = gl;
     const sm_mesh_anim *a = m->anim;
     double s;
     int moving;

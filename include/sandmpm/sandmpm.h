@@ -487,7 +487,9 @@ SM_API uint64_t sm_allocation_count(void);
  *  between `start` and `stop` (s). Each particle has V0 = dx^d/ppc, mass rho V0, the given
  *  velocity, and is undeformed. Emission is deterministic (counter-based RNG from `seed`). */
 typedef struct sm_emitter_def {
-    sm_shape shape;       /**< where particles appear (must be inside the usable domain) */
+    sm_shape shape;       /**< where particles appear (must be inside the usable domain): a sphere,
+                               box, cylinder or closed mesh field (not inside out, not a container;
+                               the emitter keeps a reference on the field) */
     int material;         /**< material id */
     double ppc;           /**< sets the particle volume, V0 = dx^d/ppc (> 0) */
     double velocity[3];   /**< initial velocity, m/s */

@@ -35,7 +35,7 @@
  *                 | keyframes = { {t, position (required), rotation | axis_angle}, ... } (t
  *                   increasing; position linear, rotation slerp, clamped outside)
  *                 | motion = function(t) return position, rotation_or_nil end }, ... }
- *   emitters = { { shape (required; a sphere, box or cylinder overlapping the domain), material,
+ *   emitters = { { shape (required; a sphere, box, cylinder or closed mesh overlapping the domain), material,
  *                  velocity, rate = kg/s (required), start (0), stop (forever), ppc, seed }, ... }
  *   outputs = { ply = bool, vtk = bool, csv = bool }     (all true)
  *   camera = { eye (required), target (required), up = {0, 1, 0}, fov = 40 }   (3 components)

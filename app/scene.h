@@ -89,6 +89,8 @@ typedef struct sm_scene_mesh_info {
     const char *sign;                 /* "winding" or "one_sided" (after sign = "auto") */
     const char *source;               /* "built", "cache" (read from the cache file) or "shared" (an earlier shape's) */
     double seconds;                   /* load and build (or read) time, s */
+    int frames;                       /* animated: the number of frames (0: a static mesh) */
+    double fps;                       /* animated: frames per second */
 } sm_scene_mesh_info;
 
 int sm_scene_mesh_count(const sm_scene *s);

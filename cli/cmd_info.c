@@ -20,8 +20,10 @@ static void print_settings(const cli_scene_opts *so, const sm_scene *sc) {
         sm_scene_mesh_info m;
         if (!sm_scene_mesh(sc, i, &m)) continue;
         const sm_mesh_field_stats *f = m.field;
-        printf("mesh         %s: %s: %zu %s; field %zu bricks, %.3f MB, spacing %g m, band %g m, %s%s; %s in %.3f s\n",
-               m.key, m.file, m.triangles, f->dim == 3 ? "triangles" : "segments", f->bricks, (double)f->bytes / 1e6,
+        char anim[64] = "";
+        if (m.frames > 0) snprintf(anim, sizeof anim, " (%d frames at %g fps)", m.frames, m.fps);
+        printf("mesh         %s: %s%s: %zu %s; field %zu bricks, %.3f MB, spacing %g m, band %g m, %s%s; %s in %.3f s\n",
+               m.key, m.file, anim, m.triangles, f->dim == 3 ? "triangles" : "segments", f->bricks, (double)f->bytes / 1e6,
                f->spacing, f->band, m.sign, f->container ? " (container)" : "",
                !strcmp(m.source, "built") ? "built" : !strcmp(m.source, "cache") ? "read from the cache" : "shared",
                m.seconds);

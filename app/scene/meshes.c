@@ -13,6 +13,11 @@
  * <scene dir>/.sandmpm-cache/<mesh hash>-<spacing>-<band>-<sign>.sdf (SANDMPM_MESH_CACHE names
  * another folder; an empty value turns the cache off). Shapes of the same geometry share one field.
  *
+ * An animated mesh (a collider's shape only): frames = N, first = 0, fps = F and a file pattern
+ * with one %d / %04d; files first .. first + N - 1, each placed the same way and moved by the
+ * first frame's bounding box centre, must share the first frame's topology (an error names the
+ * frame and its file); sm_mesh_field_create_animated builds every frame (no cache, no sharing).
+ *
  * Why band = 6 dx: a grid block (4^d nodes, half diagonal R = 1.5 sqrt(d) dx) is skipped by the
  * collision pass when phi(centre) > L (R + reach), L being the field's Lipschitz bound (up to
  * sqrt(d) at sharp corners); beyond the band phi is clamped to the band, so the band must exceed
@@ -33,7 +38,8 @@
 #include "app/scene/scene_internal.h"
 
 static const char *const keys_mesh[] = {"type",   "file",       "unit", "scale", "rotation", "axis_angle",
-                                        "position", "sign", "resolution", "band", "inside_out"};
+                                        "position", "sign", "resolution", "band", "inside_out",
+                                        "frames", "first", "fps"};
 static const char *const sign_names[] = {"auto", "winding", "one_sided"};
 
 /* A string field (required). */
@@ -51,10 +57,58 @@ static void file_field(vctx *v, int t, char *out, size_t n) {
     sc_pop_key(v, old);
 }
 
+/* The frame-number conversion of an animated mesh's file: one %d or %0Nd (N < 10); its position
+ * (-1 if none or malformed), length, width and zero flag. */
+static int frame_pattern(const char *file, int *len, int *width, int *zero) {
+    const char *p = strchr(file, '%');
+    if (!p || strchr(p + 1, '%')) return -1;
+    const char *q = p + 1;
+    *zero = *q == '0';
+    if (*zero) q++;
+    *width = 0;
+    if (*q >= '1' && *q <= '9') *width = *q++ - '0';
+    if (*q != 'd') return -1;
+    *len = (int)(q + 1 - p);
+    return (int)(p - file);
+}
+
+/* The file name of frame number n of an animated mesh's pattern (checked by frame_pattern). */
+static void frame_file(const char *pattern, int n, char *out, size_t size) {
+    int len = 0, width = 0, zero = 0;
+    const int at = frame_pattern(pattern, &len, &width, &zero);
+    if (zero) snprintf(out, size, "%.*s%0*d%s", at, pattern, width, n, pattern + at + len);
+    else snprintf(out, size, "%.*s%*d%s", at, pattern, width, n, pattern + at + len);
+}
+
+/* frames = N (>= 2), first = number of the first file (0), fps (required with frames): a mesh
+ * given as N files, file being a pattern with one %d / %04d; only a collider's shape. */
+static void parse_animation(vctx *v, int t, scene_mesh *m) {
+    int has = 0, len, width, zero;
+    const double n = sc_num_field(v, t, "frames", 0, &has, 2.0, 1, 100000.0, 1);
+    if (!has) {
+        if (sc_get(v, t, "fps") != LUA_TNIL || sc_get(v, t, "first") != LUA_TNIL)
+            sc_fail(v, "fps and first belong to an animated mesh: give frames = N (the number of frame files) too");
+        lua_pop(v->L, 2);
+        return;
+    }
+    size_t old = sc_push_key(v, "frames");
+    if (n != floor(n)) sc_fail(v, "expected a whole number of frame files, got %g", n);
+    if (strncmp(v->path, "colliders", 9)) sc_fail(v, "an animated mesh can only be a collider's shape");
+    sc_pop_key(v, old);
+    m->frames = (int)n;
+    m->first = (int)sc_num_field(v, t, "first", 0, NULL, 0.0, 1, 1e8, 1);
+    int has_fps = 0;
+    m->fps = sc_num_field(v, t, "fps", 0, &has_fps, SC_GT0);
+    sc_require(v, has_fps, "fps", "(frames per second of the mesh's file sequence)");
+    if (frame_pattern(m->file, &len, &width, &zero) < 0) {
+        sc_push_key(v, "file");
+        sc_fail(v, "an animated mesh's file must hold one frame number pattern, %%d or %%04d (e.g. \"blob_%%04d.obj\")");
+    }
+}
+
 void sc_parse_mesh_shape(vctx *v, int t, sm_shape *s) {
     sm_scene *sc = v->s;
     sc_check_keys(v, t, keys_mesh, SC_NKEYS(keys_mesh), "a mesh");
-    if (!strncmp(v->path, "emitters", 8)) sc_fail(v, "an emitter's shape cannot be a mesh (use a sphere, box or cylinder)");
     if (sc->nmesh == sc->mesh_cap) {
         int cap = sc->mesh_cap ? 2 * sc->mesh_cap : 4;
         scene_mesh *q = realloc(sc->meshes, (size_t)cap * sizeof *q);
@@ -86,19 +140,21 @@ void sc_parse_mesh_shape(vctx *v, int t, sm_shape *s) {
     m.sign = sc_enum_field(v, t, "sign", sign_names, 3, 0) - 1;
     m.resolution = sc_num_field(v, t, "resolution", 1.0, NULL, 0.25, 1, 8.0, 1);
     m.band = sc_num_field(v, t, "band", 6.0, NULL, 2.0, 1, 64.0, 1);
-    m.solid = !strncmp(v->path, "objects", 7);
+    m.solid = !strncmp(v->path, "objects", 7) || !strncmp(v->path, "emitters", 8);
+    parse_animation(v, t, &m);
     sc->meshes[sc->nmesh++] = m;
     s->kind = SM_SHAPE_MESH;
     s->mesh = NULL;
     memcpy(s->center, m.position, sizeof s->center);
 }
 
-/* The shape a mesh key names ("objects[i].shape", "objects[i].clip", "colliders[i].shape",
- * "colliders[i].shapes[j]"), or NULL. */
+/* The shape a mesh key names ("objects[i].shape", "objects[i].clip", "emitters[i].shape",
+ * "colliders[i].shape", "colliders[i].shapes[j]"), or NULL. */
 static sm_shape *shape_at(sm_scene *s, const char *key) {
     int i = 0, j = 0, n = 0;
     if (sscanf(key, "objects[%d].shape%n", &i, &n) == 1 && key[n] == 0 && i >= 1 && i <= s->nobj) return &s->objs[i - 1].shape;
     if (sscanf(key, "objects[%d].clip%n", &i, &n) == 1 && key[n] == 0 && i >= 1 && i <= s->nobj) return &s->objs[i - 1].clip;
+    if (sscanf(key, "emitters[%d].shape%n", &i, &n) == 1 && key[n] == 0 && i >= 1 && i <= s->nemit) return &s->emits[i - 1].shape;
     if (sscanf(key, "colliders[%d].shapes[%d]%n", &i, &j, &n) == 2 && key[n] == 0 && i >= 1 && i <= s->ncol && j >= 1 &&
         j <= s->cols[i - 1].def.shape_count)
         return &s->cols[i - 1].def.shapes[j - 1];
@@ -194,6 +250,75 @@ static void centre_mesh(sm_mesh_data *md, double c[3]) {
 static sm_mesh_field *shared_field(const sm_scene *s, int upto, uint64_t hash, double h, double band, int sign,
                                    const double c[3]);
 
+/* Frame f's topology against frame 0's: "" if the same, else why not. */
+static void same_topology(const sm_mesh_data *a, const sm_mesh_data *b, char *msg, size_t n) {
+    msg[0] = 0;
+    if (a->vertex_count != b->vertex_count || a->element_count != b->element_count)
+        snprintf(msg, n, "%zu vertices and %zu elements, the first frame %zu and %zu", b->vertex_count, b->element_count,
+                 a->vertex_count, a->element_count);
+    else if (memcmp(a->elements, b->elements, a->element_count * (size_t)a->dim * sizeof(uint32_t)))
+        snprintf(msg, n, "its elements use other vertices than the first frame's");
+}
+
+/* Loads the frame files of animated mesh m (placed like a static one; every frame moved by the
+ * first frame's bounding box centre) and makes the animated field (not cached, not shared). */
+static sm_status make_anim_field(sm_scene *s, scene_mesh *m, sm_shape *sh, const char *at, const char *key,
+                                 const sm_mesh_load_opts *o, char *err, size_t errlen) {
+    sm_mesh_data *md = calloc((size_t)m->frames, sizeof *md);
+    sm_mesh_field_def *d = calloc((size_t)m->frames, sizeof *d);
+    char name[1100], path[2300], msg[1024];
+    double c[3] = {0, 0, 0}, t0 = now_seconds();
+    sm_status st = md && d ? SM_OK : sc_fail_msg(err, errlen, SM_ERR_NOMEM, "out of memory");
+    for (int f = 0; f < m->frames && st == SM_OK; f++) {
+        frame_file(m->file, m->first + f, name, sizeof name);
+        resolve_path(s, name, path, sizeof path);
+        st = sm_mesh_load(path, o, &md[f], msg, sizeof msg);
+        if (st != SM_OK) {
+            st = sc_fail_msg(err, errlen, st == SM_ERR_NOMEM ? SM_ERR_NOMEM : SM_ERR_INVALID, "%s: %s: frame %d: %s", at, key,
+                             m->first + f, msg);
+            break;
+        }
+        if (msg[0] && f == 0) sc_warn_msg(s, "%s: %s: %s", at, key, msg);
+        if (f == 0) centre_mesh(&md[0], c);
+        else {
+            for (size_t i = 0; i < md[f].vertex_count; i++)
+                for (int a = 0; a < 3; a++) md[f].vertices[3 * i + a] -= c[a];
+            same_topology(&md[0], &md[f], msg, sizeof msg);
+            if (msg[0])
+                st = sc_fail_msg(err, errlen, SM_ERR_INVALID, "%s: %s: frame %d (%s): not the first frame's topology: %s", at,
+                                 key, m->first + f, path, msg);
+        }
+    }
+    const int sign = st == SM_OK && m->sign < 0 ? (md[0].report.open_edges > 0 ? SM_MESH_SIGN_ONE_SIDED : SM_MESH_SIGN_WINDING)
+                                                : m->sign;
+    for (int f = 0; f < m->frames && st == SM_OK; f++) {
+        d[f] = sm_mesh_field_def_default();
+        d[f].dim = md[f].dim;
+        d[f].vertices = md[f].vertices, d[f].vertex_count = md[f].vertex_count;
+        d[f].elements = md[f].elements, d[f].element_count = md[f].element_count;
+        d[f].spacing = s->def.dx / m->resolution, d[f].band = m->band * s->def.dx;
+        d[f].sign = (sm_mesh_sign)sign;
+        d[f].threads = s->def.threads;
+    }
+    sm_mesh_field *field = NULL;
+    if (st == SM_OK && (st = sm_mesh_field_create_animated(d, m->frames, m->fps, &field, msg, sizeof msg)) != SM_OK)
+        st = sc_fail_msg(err, errlen, st == SM_ERR_NOMEM ? SM_ERR_NOMEM : SM_ERR_INVALID, "%s: %s: %s: %s", at, key, m->file, msg);
+    if (st == SM_OK) {
+        m->triangles = md[0].element_count;
+        m->hash = md[0].hash;
+        m->sign_used = sign;
+        memcpy(m->centre, c, sizeof c);
+        m->field = field;
+        m->seconds = now_seconds() - t0;
+        for (int a = 0; a < 3; a++) sh->center[a] = m->position[a] + c[a];
+        sh->mesh = field;
+    }
+    for (int f = 0; md && f < m->frames; f++) sm_mesh_data_free(&md[f]);
+    free(md);
+    free(d);
+    return st;
+}
+
 /* Loads mesh m (the shape sh) and makes its field. */
 static sm_status make_field(sm_scene *s, int idx, sm_shape *sh, char *err, size_t errlen) {
     scene_mesh *m = &s->meshes[idx];
@@ -207,6 +332,7 @@ static sm_status make_field(sm_scene *s, int idx, sm_shape *sh, char *err, size_
     o.placement.unit = m->unit;
     memcpy(o.placement.scale, m->scale, sizeof m->scale);
     memcpy(o.placement.rotation, m->rotation, sizeof m->rotation);
+    if (m->frames > 0) return make_anim_field(s, m, sh, at, key, &o, err, errlen);
     sm_mesh_data md;
     double t0 = now_seconds();
     sm_status st = sm_mesh_load(path, &o, &md, msg, sizeof msg);
@@ -258,7 +384,7 @@ static sm_mesh_field *shared_field(const sm_scene *s, int upto, uint64_t hash, d
                                    const double c[3]) {
     for (int i = 0; i < upto; i++) {
         const scene_mesh *o = &s->meshes[i];
-        if (!o->field || o->hash != hash || o->sign_used != sign) continue;
+        if (!o->field || o->frames || o->hash != hash || o->sign_used != sign) continue;
         const sm_mesh_field_stats *st = sm_mesh_field_get_stats(o->field);
         if (st->spacing != h || st->band != band || memcmp(o->centre, c, sizeof o->centre)) continue;
         return sm_mesh_field_retain(o->field);
@@ -296,5 +422,7 @@ int sm_scene_mesh(const sm_scene *s, int i, sm_scene_mesh_info *out) {
     out->sign = m->sign_used == SM_MESH_SIGN_WINDING ? "winding" : "one_sided";
     out->source = m->cached == 2 ? "shared" : m->cached ? "cache" : "built";
     out->seconds = m->seconds;
+    out->frames = m->frames;
+    out->fps = m->fps;
     return 1;
 }

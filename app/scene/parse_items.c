@@ -471,7 +471,7 @@ void sc_parse_emitter(vctx *v, int t, int i, void *item, void *ctx) {
     sc_require(v, shape_field(v, t, "shape", &e->shape), "shape", "");
     if (e->shape.kind == SM_SHAPE_HALFSPACE || e->shape.inside_out) {
         sc_push_key(v, "shape");
-        sc_fail(v, "an emitter's shape must be a sphere, box or cylinder (not a halfspace, not inside_out)");
+        sc_fail(v, "an emitter's shape must be a sphere, box, cylinder or closed mesh (not a halfspace, not inside_out)");
     }
     e->material = material_field(v, t);
     sc_vec_field(v, t, "velocity", e->velocity);

@@ -87,6 +87,9 @@ typedef struct scene_mesh {
     uint64_t hash;         /* of the loaded (placed, welded) geometry */
     int sign_used;         /* the sign rule of the field */
     double centre[3];      /* the bounding box centre the mesh was moved by */
+    int frames;            /* animated: the number of frame files (file is a %d pattern); 0: static */
+    int first;             /* animated: the first frame's number in the file names */
+    double fps;            /* animated: frames per second */
 } scene_mesh;
 
 typedef struct scene_param {

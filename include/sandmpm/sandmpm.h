@@ -344,6 +344,19 @@ typedef struct sm_mesh_field_stats {
  *  of range, a non-finite vertex, spacing or band out of range, a table too large for the spacing)
  *  / SM_ERR_NOMEM with the reason in err (if not NULL) and *out = NULL. */
 SM_API sm_status sm_mesh_field_create(const sm_mesh_field_def *def, sm_mesh_field **out, char *err, size_t errlen);
+/** An animated field (issue 15): frame_count >= 2 frames of one mesh (the same vertex count and
+ *  element array, vertices moved), shown at fps frames per second from t = 0, held before the
+ *  first and after the last. At time t between frames f and f+1 (fraction s), phi = (1-s) phi_f
+ *  + s phi_{f+1} and the surface's velocity is (1-s) v_f + s v_{f+1}, v_k being the vertex
+ *  velocities (x^{f+1} - x^f) fps interpolated with the barycentric coordinates of the closest
+ *  point on frame k's triangles (0 before the first frame and after the last). A collider with
+ *  such a shape pushes sand with that velocity (plus its own rigid motion); seeding, emitters and
+ *  sm_mesh_field_distance see frame 0. SM_ERR_INVALID names the frame whose topology differs or
+ *  whose field fails; every frame is built (frames[i].threads) and kept. One reference. */
+SM_API sm_status sm_mesh_field_create_animated(const sm_mesh_field_def *frames, int frame_count, double fps,
+                                               sm_mesh_field **out, char *err, size_t errlen);
+/** Frames of an animated field (1 for a static one) and its frames per second (0 if static). */
+SM_API int sm_mesh_field_frame_count(const sm_mesh_field *f, double *fps);
 /** Adds a reference; returns f. */
 SM_API sm_mesh_field *sm_mesh_field_retain(sm_mesh_field *f);
 /** Drops a reference; the last one frees the field. NULL is fine. */
@@ -474,7 +487,9 @@ SM_API uint64_t sm_allocation_count(void);
  *  between `start` and `stop` (s). Each particle has V0 = dx^d/ppc, mass rho V0, the given
  *  velocity, and is undeformed. Emission is deterministic (counter-based RNG from `seed`). */
 typedef struct sm_emitter_def {
-    sm_shape shape;       /**< where particles appear (must be inside the usable domain) */
+    sm_shape shape;       /**< where particles appear (must be inside the usable domain): a sphere,
+                               box, cylinder or closed mesh field (not inside out, not a container;
+                               the emitter keeps a reference on the field) */
     int material;         /**< material id */
     double ppc;           /**< sets the particle volume, V0 = dx^d/ppc (> 0) */
     double velocity[3];   /**< initial velocity, m/s */

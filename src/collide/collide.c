@@ -148,7 +148,7 @@ static double box_sdf(const double *p, const double *h, int n, double *g) {
 
 /* Distance in the shape's own frame (p relative to the centre, already unrotated); g in that
  * frame. The half-space normal is taken in the shape frame too (rotated with the shape). */
-static double shape_local_sdf(const sm_shape *s, int dim, const double p[3], double g[3]) {
+static double shape_local_sdf(const sm_shape *s, int dim, const double p[3], double g[3], double t) {
     g[0] = g[1] = g[2] = 0.0;
     switch (s->kind) {
     case SM_SHAPE_HALFSPACE: {
@@ -195,26 +195,27 @@ static double shape_local_sdf(const sm_shape *s, int dim, const double p[3], dou
         g[2] = g2[0] * er[1];
         return phi;
     }
-    case SM_SHAPE_MESH:
-        return sm_mesh_field_local(s->mesh, p, g);
+    case SM_SHAPE_MESH: /* an animated field at time t (t only matters for one) */
+        return s->mesh->anim ? sm_mesh_anim_local(s->mesh, t, p, g) : sm_mesh_field_local(s->mesh, p, g);
     }
     SM_ASSERT(0 && "unknown shape kind");
     return HUGE_VAL;
 }
 
-double sm_shape_distance(const sm_shape *s, int dim, const double x[3], double grad[3]) {
+/* sm_shape_distance at time t (animated mesh fields; every other shape ignores t). */
+static double shape_distance_at(const sm_shape *s, int dim, const double x[3], double grad[3], double t) {
     SM_ASSERT(dim == 2 || dim == 3);
     double d[3], p[3], g[3], phi;
     d[0] = x[0] - s->center[0];
     d[1] = x[1] - s->center[1];
     d[2] = dim == 3 ? x[2] - s->center[2] : 0.0;
     if (quat_is_identity(s->rotation)) {
-        phi = shape_local_sdf(s, dim, d, g);
+        phi = shape_local_sdf(s, dim, d, g, t);
     } else {
         double R[9], gl[3];
         sm_quat_to_mat(s->rotation, R);
         mat_t_vec(R, dim, d, p);
-        phi = shape_local_sdf(s, dim, p, gl);
+        phi = shape_local_sdf(s, dim, p, gl, t);
         mat_vec(R, dim, gl, g);
     }
     if (s->inside_out) {
@@ -229,6 +230,10 @@ double sm_shape_distance(const sm_shape *s, int dim, const double x[3], double g
         grad[2] = dim == 3 ? g[2] : 0.0;
     }
     return phi;
+}
+
+double sm_shape_distance(const sm_shape *s, int dim, const double x[3], double grad[3]) {
+    return shape_distance_at(s, dim, x, grad, 0.0);
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -255,8 +260,10 @@ void sm_collider_init(sm_collider *c, const sm_collider_def *def) {
     c->def = *def;
     c->lip = 1.0;
     for (int s = 0; s < def->shape_count; s++)
-        if (def->shapes[s].kind == SM_SHAPE_MESH)
+        if (def->shapes[s].kind == SM_SHAPE_MESH) {
             c->lip = fmax(c->lip, sm_mesh_field_get_stats(def->shapes[s].mesh)->lipschitz);
+            if (def->shapes[s].mesh->anim) c->animated = 1;
+        }
     c->t0 = 0.0;
     c->dt = 0.0;
     c->pose0 = def->pose;
@@ -336,10 +343,11 @@ double sm_collider_phi(const sm_collider *c, int dim, int which, const double x[
     double d[3] = {x[0] - pose->position[0], x[1] - pose->position[1],
                    dim == 3 ? x[2] - pose->position[2] : 0.0};
     double xl[3], best = HUGE_VAL, gbest[3] = {0.0, 0.0, 0.0};
+    const double t = which ? c->t0 + c->dt : c->t0;
     mat_t_vec(R, dim, d, xl);
     for (int s = 0; s < c->def.shape_count; s++) {
         double g[3];
-        double phi = sm_shape_distance(&c->def.shapes[s], dim, xl, g);
+        double phi = shape_distance_at(&c->def.shapes[s], dim, xl, g, t);
         if (phi < best) { /* strict: the first minimiser wins ties */
             best = phi;
             gbest[0] = g[0];
@@ -357,6 +365,29 @@ double sm_collider_phi(const sm_collider *c, int dim, int which, const double x[
     return best;
 }
 
+/* The deformation velocity (world frame) an animated mesh adds at world point x at t^{n+1}: that
+ * of the shape nearest x (smallest phi) if it is an animated mesh, else 0. */
+static void animated_velocity(const sm_collider *c, int dim, const double x[3], double add[3]) {
+    const double t = c->t0 + c->dt, *p = c->pose1.position;
+    double d[3] = {x[0] - p[0], x[1] - p[1], dim == 3 ? x[2] - p[2] : 0.0}, xl[3], best = HUGE_VAL;
+    int sb = 0;
+    mat_t_vec(c->R1, dim, d, xl);
+    for (int s = 0; s < c->def.shape_count; s++) {
+        double phi = shape_distance_at(&c->def.shapes[s], dim, xl, NULL, t);
+        if (phi < best) best = phi, sb = s;
+    }
+    const sm_shape *s = &c->def.shapes[sb];
+    add[0] = add[1] = add[2] = 0.0;
+    if (s->kind != SM_SHAPE_MESH || !s->mesh->anim) return;
+    double R[9], q[3], ps[3] = {xl[0] - s->center[0], xl[1] - s->center[1], dim == 3 ? xl[2] - s->center[2] : 0.0};
+    double vm[3], vl[3];
+    sm_quat_to_mat(s->rotation, R);
+    mat_t_vec(R, dim, ps, q);
+    sm_mesh_anim_velocity(s->mesh, t, q, vm);
+    mat_vec(R, dim, vm, vl);
+    mat_vec(c->R1, dim, vl, add);
+}
+
 void sm_collider_velocity(const sm_collider *c, int dim, const double x[3], double vel[3]) {
     const double *p = c->pose1.position, *w = c->w;
     if (dim == 2) {
@@ -369,6 +400,11 @@ void sm_collider_velocity(const sm_collider *c, int dim, const double x[3], doub
         vel[0] = c->v[0] + w[1] * r[2] - w[2] * r[1];
         vel[1] = c->v[1] + w[2] * r[0] - w[0] * r[2];
         vel[2] = c->v[2] + w[0] * r[1] - w[1] * r[0];
+    }
+    if (c->animated) {
+        double add[3];
+        animated_velocity(c, dim, x, add);
+        for (int k = 0; k < dim; k++) vel[k] += add[k];
     }
 }
 

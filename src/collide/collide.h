@@ -23,6 +23,8 @@ typedef struct sm_collider {
     double w[3];           /* angular velocity over the step, rad/s (world frame) */
     double lip;            /* Lipschitz constant of phi: 1 for analytic shapes, the largest
                               stats.lipschitz of its mesh shapes otherwise (for the culling bounds) */
+    int animated;          /* 1: a shape is an animated mesh: phi depends on time (t0, t0 + dt) and
+                              the velocity adds the mesh's deformation velocity (mesh_anim.c) */
 } sm_collider;
 
 /* Copies the definition, sets pose0 = pose1 = def->pose (or motion(user, 0) if a motion function
@@ -42,11 +44,13 @@ void sm_collider_begin_step(sm_collider *c, double t0, double dt);
 /* pose0 <- pose1, t0 <- t0 + dt (call after the step is accepted). */
 void sm_collider_end_step(sm_collider *c);
 
-/* Signed distance at x for pose `which` (0 = t^n, 1 = t^{n+1}); unit gradient in grad if not NULL.
+/* Signed distance at x for pose `which` (0 = t^n, 1 = t^{n+1}; animated meshes at that time);
+ * unit gradient in grad if not NULL.
  * In 2D (dim == 2) only x, y are used and grad[2] = 0. */
 double sm_collider_phi(const sm_collider *c, int dim, int which, const double x[3], double grad[3]);
 
-/* Velocity of the collider's material at world point x (rigid: v + w x (x - origin1)). */
+/* Velocity of the collider's material at world point x (rigid: v + w x (x - origin1)), plus, for
+ * a collider with an animated mesh nearest x, that mesh's surface velocity at t^{n+1}. */
 void sm_collider_velocity(const sm_collider *c, int dim, const double x[3], double vel[3]);
 
 #define SM_MAX_NODE_CONTACTS 4

@@ -9,7 +9,7 @@
 sm_mesh_field_def sm_mesh_field_def_default(void) { return sm_mesh_sdf_def_default(); }
 
 /* Wraps sdf (taken over) in a handle with one reference; NULL (sdf destroyed) if out of memory. */
-static sm_mesh_field *wrap(sm_mesh_sdf *sdf) {
+sm_mesh_field *sm_mesh_field_wrap(sm_mesh_sdf *sdf) {
     sm_mesh_field *m = sm_calloc(1, sizeof *m);
     if (!m) {
         sm_mesh_sdf_destroy(sdf);
@@ -40,7 +40,7 @@ sm_status sm_mesh_field_create(const sm_mesh_field_def *def, sm_mesh_field **out
     sm_mesh_sdf *sdf = NULL;
     sm_status st = sm_mesh_sdf_build(def, &sdf, err, errlen);
     if (st != SM_OK) return st;
-    if (!(*out = wrap(sdf))) {
+    if (!(*out = sm_mesh_field_wrap(sdf))) {
         if (err && errlen) snprintf(err, errlen, "mesh field: out of memory");
         return SM_ERR_NOMEM;
     }
@@ -53,7 +53,7 @@ sm_status sm_mesh_field_deserialize(const void *buf, size_t n, sm_mesh_field **o
     sm_mesh_sdf *sdf = NULL;
     sm_status st = sm_mesh_sdf_deserialize(buf, n, &sdf, err, errlen);
     if (st != SM_OK) return st;
-    if (!(*out = wrap(sdf))) {
+    if (!(*out = sm_mesh_field_wrap(sdf))) {
         if (err && errlen) snprintf(err, errlen, "mesh field: out of memory");
         return SM_ERR_NOMEM;
     }
@@ -70,7 +70,8 @@ void sm_mesh_field_release(sm_mesh_field *f) {
     if (!f) return;
     SM_ASSERT(f->refs > 0);
     if (--f->refs > 0) return;
-    sm_mesh_sdf_destroy(f->sdf);
+    if (f->anim) sm_mesh_anim_destroy(f->anim); /* owns every frame's field, f->sdf included */
+    else sm_mesh_sdf_destroy(f->sdf);
     free(f);
 }
 

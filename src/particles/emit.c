@@ -4,9 +4,18 @@
  * kilograms; it adds floor(owed / m_p) particles, each at a uniformly random point of its shape
  * (rejection sampling in the shape's bounding box), and carries the remainder to the next step, so
  * the emitted mass follows rate * t to within one particle. Points come from a counter-based RNG of
- * (seed, emitted count): the result does not depend on step sizes' history or thread count. */
+ * (seed, emitted count): the result does not depend on step sizes' history or thread count.
+ *
+ * A mesh region (SM_SHAPE_MESH, issue 15) is sampled the same way: inside is phi < 0 of its
+ * field, the box is the world box of the field's table box (stats lo/hi, placed by the shape's
+ * rotation and centre), clipped to the usable domain and shrunk to the lattice cells that may hold
+ * an inside point (shrink_to_inside); a mesh filling less than 2% of that box is
+ * refused (1000 misses in a row would then be likely enough to matter). The emitter keeps a
+ * reference on the field (released by sm_world_destroy). Containers (unbounded solids) are refused. */
 #include <string.h>
 
+#include "collide/collide.h"
+#include "collide/mesh_field.h"
 #include "core/hash.h"
 #include "world/world.h"
 
@@ -22,6 +31,73 @@ sm_emitter_def sm_emitter_def_default(void) {
     return e;
 }
 
+/* Clips [bmin, bmax] to [lo, hi]; 0 if that leaves nothing. */
+static int clip_box(int dim, const double lo[3], const double hi[3], double bmin[3], double bmax[3]) {
+    for (int a = 0; a < 3; a++) {
+        bmin[a] = a < dim ? fmax(lo[a], bmin[a]) : 0;
+        bmax[a] = a < dim ? fmin(hi[a], bmax[a]) : 0;
+    }
+    for (int a = 0; a < dim; a++)
+        if (!(bmax[a] > bmin[a])) return 0;
+    return 1;
+}
+
+/* Shrinks [bmin, bmax] to the cells of a 64^dim lattice that may hold a point with phi < 0: the
+ * field's interpolant satisfies phi(x) >= phi(y) - |x - y| - sqrt(d) h (docs/mesh-fields.md,
+ * "Lipschitz"), so a cell whose centre y has phi(y) > (half diagonal) + sqrt(d) h holds none.
+ * 0 if no cell may. */
+static int shrink_to_inside(const sm_shape *s, int dim, double bmin[3], double bmax[3]) {
+    enum { N = 64 };
+    double c[3] = {0, 0, 0}, half2 = 0, nlo[3] = {INFINITY, INFINITY, 0}, nhi[3] = {-INFINITY, -INFINITY, 0};
+    for (int a = 0; a < dim; a++) {
+        c[a] = (bmax[a] - bmin[a]) / N;
+        half2 += 0.25 * c[a] * c[a];
+    }
+    if (dim == 3) nlo[2] = INFINITY, nhi[2] = -INFINITY;
+    const double margin = sqrt(half2) + sqrt((double)dim) * sm_mesh_field_get_stats(s->mesh)->spacing;
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < N; j++)
+            for (int k = 0; k < (dim == 3 ? N : 1); k++) {
+                const int ijk[3] = {i, j, k};
+                double y[3] = {0, 0, 0};
+                for (int a = 0; a < dim; a++) y[a] = bmin[a] + (ijk[a] + 0.5) * c[a];
+                if (sm_shape_distance(s, dim, y, NULL) > margin) continue;
+                for (int a = 0; a < dim; a++) {
+                    nlo[a] = fmin(nlo[a], y[a] - 0.5 * c[a]);
+                    nhi[a] = fmax(nhi[a], y[a] + 0.5 * c[a]);
+                }
+            }
+    for (int a = 0; a < dim; a++) {
+        if (!(nhi[a] > nlo[a])) return 0;
+        bmin[a] = fmax(bmin[a], nlo[a]);
+        bmax[a] = fmin(bmax[a], nhi[a]);
+    }
+    return 1;
+}
+
+/* A mesh: the world box of the field's table box (mesh frame) placed by the shape's rotation and
+ * centre (its 2^dim corners), clipped, then shrunk about the inside; 0 for a container (solid
+ * everywhere outside). */
+static int mesh_bounds(const sm_shape *s, int dim, const double lo[3], const double hi[3], double bmin[3],
+                       double bmax[3]) {
+    if (!s->mesh || s->inside_out || !isfinite(sm_mesh_field_extent(s->mesh))) return 0;
+    const sm_mesh_field_stats *st = sm_mesh_field_get_stats(s->mesh);
+    double R[9];
+    sm_quat_to_mat(s->rotation, R);
+    for (int a = 0; a < 3; a++) bmin[a] = INFINITY, bmax[a] = -INFINITY;
+    for (int c = 0; c < (1 << dim); c++) {
+        double p[3] = {0, 0, 0};
+        for (int a = 0; a < dim; a++) p[a] = (c >> a) & 1 ? st->hi[a] : st->lo[a];
+        for (int a = 0; a < 3; a++) {
+            const double x = s->center[a] + R[3 * a] * p[0] + R[3 * a + 1] * p[1] + R[3 * a + 2] * p[2];
+            bmin[a] = fmin(bmin[a], x);
+            bmax[a] = fmax(bmax[a], x);
+        }
+    }
+    if (!clip_box(dim, lo, hi, bmin, bmax)) return 0;
+    return shrink_to_inside(s, dim, bmin, bmax);
+}
+
 /* Bounding box of a finite shape (conservative), clipped to [lo, hi]. Returns 0 for unbounded. */
 static int emitter_bounds(const sm_shape *s, int dim, const double lo[3], const double hi[3], double bmin[3],
                           double bmax[3]) {
@@ -33,6 +109,7 @@ static int emitter_bounds(const sm_shape *s, int dim, const double lo[3], const 
                  (dim == 3 ? s->half_extent[2] * s->half_extent[2] : 0));
         break;
     case SM_SHAPE_CYLINDER: r = sqrt(s->radius * s->radius + s->half_height * s->half_height); break;
+    case SM_SHAPE_MESH: return mesh_bounds(s, dim, lo, hi, bmin, bmax);
     default: return 0;
     }
     if (s->inside_out) return 0;
@@ -61,10 +138,24 @@ sm_status sm_world_add_emitter(sm_world *w, const sm_emitter_def *e, int *id) {
         lo[a] = w->def.domain_min[a] + 2 * w->def.dx;
         hi[a] = w->def.domain_max[a] - 2 * w->def.dx;
     }
+    if (e->shape.kind == SM_SHAPE_MESH && (!e->shape.mesh || sm_mesh_field_get_stats(e->shape.mesh)->dim != w->dim))
+        return sm_world_fail(w, SM_ERR_INVALID, "emitter shape: a mesh shape needs a field of the world's dimension");
     if (!emitter_bounds(&e->shape, w->dim, lo, hi, bmin, bmax))
-        return sm_world_fail(w, SM_ERR_INVALID, "emitter shape: must be a sphere, box or cylinder (not inside-out) inside the domain");
+        return sm_world_fail(w, SM_ERR_INVALID,
+                             "emitter shape: must be a sphere, box, cylinder or closed mesh (not inside-out, not a "
+                             "container) inside the domain");
     if (!(sm_shape_volume_estimate(&e->shape, NULL, w->dim, lo, hi) > 0))
         return sm_world_fail(w, SM_ERR_INVALID, "emitter shape: has no volume inside the usable domain");
+    if (e->shape.kind == SM_SHAPE_MESH) { /* rejection sampling gives up after 1000 tries: P < 2e-9 */
+        double box = 1;
+        for (int a = 0; a < w->dim; a++) box *= bmax[a] - bmin[a];
+        const double fill = sm_shape_volume_estimate(&e->shape, NULL, w->dim, bmin, bmax) / box;
+        if (!(fill >= 0.02))
+            return sm_world_fail(w, SM_ERR_INVALID,
+                                 "emitter shape: the mesh fills %.2g%% of its bounding box in the usable domain "
+                                 "(at least 2%% needed for sampling): use a more compact mesh",
+                                 100 * fill);
+    }
     if (w->nemitters == w->emitters_cap) {
         int cap = w->emitters_cap ? 2 * w->emitters_cap : 4;
         sm_emitter *q = sm_realloc(w->emitters, (size_t)cap * sizeof *q);
@@ -78,6 +169,7 @@ sm_status sm_world_add_emitter(sm_world *w, const sm_emitter_def *e, int *id) {
     memcpy(em->bmin, bmin, sizeof bmin);
     memcpy(em->bmax, bmax, sizeof bmax);
     em->particle_mass = pow(w->def.dx, w->dim) / e->ppc * w->mats[e->material].def.density;
+    if (e->shape.kind == SM_SHAPE_MESH) sm_mesh_field_retain((sm_mesh_field *)e->shape.mesh);
     if (id) *id = w->nemitters;
     w->nemitters++;
     return SM_OK;

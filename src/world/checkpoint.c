@@ -3,7 +3,7 @@
  *
  * Every field of struct sm_world (world.h) is accounted for here:
  *   saved      def; materials' defs; user colliders' defs (motion pointers as a flag) and their
- *              step state t0, dt, pose0/1, R0/1, v, w; emitters' defs, owed, emitted (their
+ *              step state t0, dt, pose0/1, R0/1, v, w; emitters' defs (mesh pointers as NULL), owed, emitted (their
  *              counter-based RNG's whole state is (seed, emitted)); every particle field from the
  *              descriptor table (particles.h), so a field added or retyped there is saved with
  *              no change here; time, steps, last_dt, min_dt, max_dt, stage_seconds, clamped,
@@ -121,7 +121,9 @@ sm_status sm_world_save(const sm_world *w, sm_write_fn write, void *user) {
     }
     put_u32(&o, (uint32_t)w->nemitters);
     for (int i = 0; i < w->nemitters; i++) {
-        put(&o, &w->emitters[i].def, sizeof w->emitters[i].def);
+        sm_emitter_def e = w->emitters[i].def;
+        e.shape.mesh = NULL; /* a pointer: not state */
+        put(&o, &e, sizeof e);
         put_f64(&o, w->emitters[i].owed);
         put_u64(&o, w->emitters[i].emitted);
     }
@@ -252,6 +254,10 @@ static sm_status read_defs(reader *r, sm_world *w, int build) {
         sm_emitter_def e;
         get(r, &e, sizeof e);
         if (r->short_read) break;
+        if (build && e.shape.kind == SM_SHAPE_MESH)
+            return sm_world_fail(w, SM_ERR_INVALID,
+                                 "checkpoint: emitter %u has a mesh shape, whose field a checkpoint does not hold: "
+                                 "restore it into a world built with its emitters (sm_world_restore)", i);
         if (build && sm_world_add_emitter(w, &e, NULL) != SM_OK) return SM_ERR_INVALID;
         w->emitters[i].owed = get_f64(r);
         w->emitters[i].emitted = get_u64(r);

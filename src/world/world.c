@@ -220,6 +220,8 @@ void sm_world_destroy(sm_world *w) {
     free(w->mats);
     for (int i = 0; i < w->ncolliders; i++) sm_collider_release_meshes(&w->colliders[i]);
     free(w->colliders);
+    for (int i = 0; i < w->nemitters; i++)
+        if (w->emitters[i].def.shape.kind == SM_SHAPE_MESH) sm_mesh_field_release((sm_mesh_field *)w->emitters[i].def.shape.mesh);
     free(w->emitters);
     free(w->emit_buf);
     free(w);

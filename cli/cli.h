@@ -3,7 +3,8 @@
  *   exit.c      the one table from sm_status to exit code
  *   usage.c     the help texts
  *   options.c   what the commands share: option parsing, loading and building a scene, the video
- *   cmd_run.c   `sandmpm run`: the sinks and the frame loop (app/run.h); progress.c: its progress line;
+ *   cmd_run.c   `sandmpm run`: the frame loop (app/run.h) with the sinks app/run_outputs.h chooses
+ *               (as for Python's Scene.run), and the progress line (progress.c);
  *               out_folder.c: the output folder claimed for the run (no two runs' files mixed)
  *   cmd_info.c, cmd_render.c, cmd_bench.c: the other commands; signals.c: SIGINT and SIGTERM */
 #ifndef SM_CLI_H

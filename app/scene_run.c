@@ -104,6 +104,11 @@ sm_status sm_scene_run(sm_scene *sc, const sm_scene_run_opts *o, int *frames_wri
         snprintf(err, errlen, "%s", !w ? "the scene is not built (sm_scene_build)" : "no output folder");
         return SM_ERR_INVALID;
     }
+    if (sm_world_time(w) != 0) {
+        snprintf(err, errlen, "the scene's world is at t = %g s; a run starts from the scene as built, at t = 0",
+                 sm_world_time(w));
+        return SM_ERR_INVALID;
+    }
     sm_run_request r;
     memset(&r, 0, sizeof r);
     r.scene = o->scene;

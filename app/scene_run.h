@@ -36,7 +36,7 @@ typedef struct sm_scene_run_opts {
 /* checkpoint_every = -1, everything else 0 / NULL. */
 sm_scene_run_opts sm_scene_run_opts_default(void);
 
-/* Runs the built scene sc (its world at t = 0) into o->out: frames 0..frames. Returns SM_OK, or
+/* Runs the built scene sc (its world at t = 0, else SM_ERR_INVALID) into o->out: frames 0..frames. Returns SM_OK, or
  * the failure's status with its message in err (a claim refused, a sink's or the world's failure,
  * a motion function's error); *frames_written: frames 0..*frames_written - 1 are complete;
  * *stopped: 1 if on_frame stopped the run. */

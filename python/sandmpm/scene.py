@@ -44,6 +44,7 @@ class Scene:
     def __init__(self, path, quality="preview", threads=0, params=None, build=True):
         self.path = os.fspath(path)
         self.quality = quality
+        self.threads = int(threads)
         self.params = {str(k): _param_text(v) for k, v in (params or {}).items()}
         keys = [ffi.new("char[]", k.encode()) for k in self.params]
         values = [ffi.new("char[]", v.encode()) for v in self.params.values()]
@@ -166,13 +167,14 @@ class Scene:
         return self.settings["frames"]
 
     def run(self, out, frames=None, end=None, render=False, overwrite=False, checkpoint_every=None,
-            keep_checkpoints=None, threads=0, on_frame=None):
+            keep_checkpoints=None, threads=None, on_frame=None):
         """Runs the built scene into folder `out` with the files `sandmpm run SCENE --out OUT
         --quality Q --set K=V ...` writes (frame_NNNN.ply/.vtp, frames.pvd, diagnostics.csv,
         render.txt, poses.csv, run_manifest.txt, checkpoints/; render=True: frame_NNNN.png as
         --render), frames 0..frames (frames=/end= as --frames/--end, else the scene's).
         checkpoint_every: frames between checkpoints (None: the scene's, else 20; 0: none);
-        keep_checkpoints: how many are kept (None: 2); threads: the renderer's. overwrite: another
+        keep_checkpoints: how many are kept (None: 2); threads: the renderer's (None: the scene's, as
+        the program's --threads serves both). overwrite: another
         run's files in out are removed first (as --overwrite); an earlier run of the same scene,
         quality and parameters is replaced without it. on_frame(scene, frame), if given, runs once
         every file of the frame is written; returning True stops the run (the manifest then says
@@ -188,7 +190,7 @@ class Scene:
         o.params, o.nparams = self._cparams, len(self.params)
         o.frames = self.frame_count(frames, end)
         o.render = int(bool(render))
-        o.threads = int(threads)
+        o.threads = self.threads if threads is None else int(threads)
         o.checkpoint_every = -1 if checkpoint_every is None else int(checkpoint_every)
         o.keep = 0 if keep_checkpoints is None else int(keep_checkpoints)
         o.overwrite = int(bool(overwrite))

@@ -85,6 +85,26 @@ def test_run_writes_the_command_lines_files(tmp_path):
                 assert fa.read() == fb.read(), name
 
 
+def test_a_lua_motion_function_moves_the_collider_as_in_the_program(tmp_path):
+    butterfly = os.path.join(ROOT, "scenes", "butterfly.lua")  # colliders[1].motion is a Lua function
+    cli_run(butterfly, tmp_path / "cli", "--quality", "test", "--checkpoint-every", "0")
+    with sm.load_scene(butterfly, quality="test") as scene:
+        assert scene.run(str(tmp_path / "py"), checkpoint_every=0)["frames_written"] == scene.settings["frames"] + 1
+        assert scene.motion_error is None
+    a, b = files(tmp_path / "cli"), files(tmp_path / "py")
+    assert sorted(a) == sorted(b) and "poses.csv" in a
+    with open(a["poses.csv"]) as f:  # frame, collider, position, rotation
+        poses = {(int(r[0]), int(r[1])): [float(v) for v in r[2:5]] for r in (line.split(",") for line in f)}
+    for f in range(3):  # the stylus descends: y = 0.1 + 0.08 (1 - t / 0.25) for t < 0.25 s
+        assert poses[(f, 1)][1] == pytest.approx(0.18 - 0.32 * f / 24, abs=1e-12)
+    for name in a:
+        if name == "diagnostics.csv":
+            assert diagnostics_without_wall(a[name]) == diagnostics_without_wall(b[name])
+        else:
+            with open(a[name], "rb") as fa, open(b[name], "rb") as fb:
+                assert fa.read() == fb.read(), name
+
+
 def test_a_second_run_replaces_the_first_and_another_scene_is_refused(tmp_path):
     out = str(tmp_path / "out")
     with sm.load_scene(DEFAULT, quality="test", dx=0.05) as scene:

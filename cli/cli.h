@@ -3,7 +3,8 @@
  *   exit.c      the one table from sm_status to exit code
  *   usage.c     the help texts
  *   options.c   what the commands share: option parsing, loading and building a scene, the video
- *   cmd_run.c   `sandmpm run`: the sinks and the frame loop (app/run.h); progress.c: its progress line;
+ *   cmd_run.c   `sandmpm run`: the frame loop (app/run.h) with the sinks app/run_outputs.h chooses
+ *               (as for Python's Scene.run), and the progress line (progress.c);
  *               out_folder.c: the output folder claimed for the run (no two runs' files mixed)
  *   cmd_info.c, cmd_render.c, cmd_bench.c: the other commands; signals.c: SIGINT and SIGTERM */
 #ifndef SM_CLI_H
@@ -15,6 +16,7 @@
 
 #include "app/run.h"
 #include "app/run_manifest.h"
+#include "app/run_outputs.h"
 #include "app/scene.h"
 #include "sandmpm/sandmpm.h"
 
@@ -85,11 +87,9 @@ sm_status cli_build_scene(const char *cmd, sm_scene *sc);
 /* Physical memory of this machine, bytes (0 if unknown). */
 double cli_machine_bytes(void);
 
-/* Default --checkpoint-every: a preview frame of the default scene (29,796 particles) took about
- * 1.7 to 2.3 s of wall time on the 2-core test machine (docs/checkpoints.md), so 20 frames lose
- * at most about 40 s. Default --keep-checkpoints: 2. */
-#define CLI_CHECKPOINT_EVERY 20
-#define CLI_KEEP_CHECKPOINTS 2
+/* Default --checkpoint-every and --keep-checkpoints: the run's defaults (app/run_outputs.h). */
+#define CLI_CHECKPOINT_EVERY SM_RUN_CHECKPOINT_EVERY
+#define CLI_KEEP_CHECKPOINTS SM_RUN_KEEP_CHECKPOINTS
 
 /* sandmpm info's estimates of a run (time, disk, memory) from a short probe of the built world;
  * the probe steps the world. SM_OK or the failing step's status (said on stderr). */

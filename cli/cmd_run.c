@@ -1,6 +1,6 @@
 /* sandmpm run [SCENE]: load and build the scene, claim the output folder (out_folder.c), then the
- * frame loop (app/run.h) with the output sinks the scene's outputs table asks for (app/sinks.h),
- * the run manifest (app/run_manifest.h) and the progress line. */
+ * frame loop (app/run.h) with the output sinks the scene's outputs table asks for (chosen by
+ * app/run_outputs.h, as for the Python package), the run manifest and the progress line. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -13,7 +13,7 @@
 
 #include "app/checkpoint.h"
 #include "app/io/files.h"
-#include "app/sinks.h"
+#include "app/run_outputs.h"
 #include "cli/cli.h"
 
 typedef struct run_args {
@@ -101,45 +101,31 @@ static sm_status parse_args(int argc, char **argv, run_args *a) {
     return SM_OK;
 }
 
-/* Everything the sinks are configured with; alive through the run. */
-typedef struct run_outputs {
-    sm_manifest_camera camera;
-    sm_png_sink_config png;
-    cli_progress_config progress;
-    sm_checkpoint_config ckpt;
-    sm_run_manifest_config manifest;
-    sm_sink sinks[10];
-    int nsinks;
-} run_outputs;
+/* The request to the shared sink choice (app/run_outputs.h). */
+static sm_run_request run_request(const run_args *a, uint64_t hash, int nframes) {
+    sm_run_request r;
+    memset(&r, 0, sizeof r);
+    r.scene = a->so.scene;
+    r.quality = a->so.quality;
+    r.scene_hash = hash;
+    r.frames = nframes;
+    r.render = a->render;
+    r.video = a->video;
+    r.threads = a->so.threads;
+    r.checkpoint_every = a->ckpt_every;
+    r.keep = a->keep;
+    return r;
+}
 
-/* The sinks in the order they see each frame: frame files, the render manifest, renders (which
- * read it), diagnostics, checkpoints, the run manifest (which lists what the others wrote),
- * progress. */
-static void choose_sinks(const run_args *a, const sm_scene_settings *st, run_outputs *o) {
-    o->camera.has_camera = st->has_camera;
-    memcpy(o->camera.eye, st->eye, sizeof st->eye);
-    memcpy(o->camera.target, st->target, sizeof st->target);
-    memcpy(o->camera.up, st->up, sizeof st->up);
-    o->camera.fov = st->fov;
-    o->png.width = 1280;
-    o->png.height = 720;
-    o->png.color = SM_COLOR_SAND;
-    o->png.threads = a->so.threads;
-    o->progress.scene_label = a->so.scene ? a->so.scene : "default scene";
-    o->progress.quality = a->so.quality ? a->so.quality : "preview";
-    o->progress.quiet = a->quiet;
-    o->progress.verbose = a->verbose;
-    o->nsinks = 0;
-    if (st->out_ply || a->render) o->sinks[o->nsinks++] = sm_sink_ply(&st->out_z_up); /* `render` reads them later */
-    if (st->out_vtk) o->sinks[o->nsinks++] = sm_sink_vtk(&st->out_z_up);
-    o->sinks[o->nsinks++] = sm_sink_manifest(&o->camera);
-    if (a->render) o->sinks[o->nsinks++] = sm_sink_png(&o->png);
-    if (st->out_csv) o->sinks[o->nsinks++] = sm_sink_csv();
-    if (o->ckpt.every > 0) o->sinks[o->nsinks++] = sm_sink_checkpoint(&o->ckpt);
-    o->manifest.written = (st->out_ply || a->render ? 1u << SM_FRAME_PLY : 0) | (st->out_vtk ? 1u << SM_FRAME_VTP : 0) |
-                          (a->render ? 1u << SM_FRAME_PNG : 0);
-    o->sinks[o->nsinks++] = sm_sink_run_manifest(&o->manifest);
-    o->sinks[o->nsinks++] = cli_progress_sink(&o->progress);
+/* The outputs of app/run_outputs.h, then the progress line and the interrupt note. */
+static void choose_sinks(const run_args *a, const sm_run_request *r, const sm_scene_settings *st, const sm_run_manifest *start,
+                         sm_run_outputs *o, cli_progress_config *progress) {
+    sm_run_outputs_choose(o, r, st, start);
+    progress->scene_label = a->so.scene ? a->so.scene : "default scene";
+    progress->quality = a->so.quality ? a->so.quality : "preview";
+    progress->quiet = a->quiet;
+    progress->verbose = a->verbose;
+    o->sinks[o->nsinks++] = cli_progress_sink(progress);
     o->sinks[o->nsinks++] = cli_interrupt_note_sink();
 }
 
@@ -199,13 +185,12 @@ static void say_what_is_complete(const char *out, int frames_written, int nframe
 static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, int nframes, int first, uint64_t hash,
                             const sm_run_manifest *manifest, int *stopped) {
     const sm_scene_settings *st = sm_scene_get_settings(sc);
-    run_outputs o;
-    o.manifest.start = *manifest;
-    o.progress.out_dir = out;
-    o.ckpt.every = a->ckpt_every;
-    o.ckpt.keep = a->keep;
-    o.ckpt.scene_hash = hash;
-    choose_sinks(a, st, &o);
+    const sm_run_request req = run_request(a, hash, nframes);
+    sm_run_outputs o;
+    cli_progress_config progress;
+    memset(&progress, 0, sizeof progress);
+    progress.out_dir = out;
+    choose_sinks(a, &req, st, manifest, &o, &progress);
     sm_run_config cfg;
     memset(&cfg, 0, sizeof cfg);
     cfg.info.out_dir = out;
@@ -258,26 +243,9 @@ static sm_status prepare_folder(const char *out) {
     return st;
 }
 
-/* FNV-1a over the scene file's bytes, the --set pairs and the quality: what a resume must match. */
+/* The scene file's bytes, the --set pairs and the quality: what a resume must match. */
 static uint64_t scene_hash(const cli_scene_opts *so) {
-    uint64_t h = 1469598103934665603ull;
-#define MIX(byte) (h = (h ^ (unsigned char)(byte)) * 1099511628211ull)
-    FILE *f = so->scene ? fopen(so->scene, "rb") : NULL;
-    if (f) {
-        int c;
-        while ((c = getc(f)) != EOF) MIX(c);
-        fclose(f);
-    }
-    MIX(0);
-    for (int i = 0; i < so->nparams; i++) {
-        for (const char *p = so->params[i].key; *p; p++) MIX(*p);
-        MIX('=');
-        for (const char *p = so->params[i].value; *p; p++) MIX(*p);
-        MIX(0);
-    }
-    for (const char *p = so->quality ? so->quality : "preview"; *p; p++) MIX(*p);
-#undef MIX
-    return h;
+    return sm_run_scene_hash(so->scene, so->params, so->nparams, so->quality);
 }
 
 /* --resume: the newest valid checkpoint in out/checkpoints restored into w; *first = its frame + 1.
@@ -336,16 +304,10 @@ static sm_status resume_world(const run_args *a, sm_world *w, const char *out, u
     return SM_ERR_IO;
 }
 
-/* The run manifest's description of this run, before any frame (app/run_manifest.h). */
+/* The run manifest's description of this run, before any frame (app/run_outputs.h). */
 static void describe_run(const run_args *a, const sm_scene_settings *set, uint64_t hash, int nframes, sm_run_manifest *m) {
-    sm_run_manifest_init(m);
-    snprintf(m->scene, sizeof m->scene, "%s", a->so.scene ? a->so.scene : "(built in) scenes/default.lua");
-    m->scene_hash = hash;
-    snprintf(m->quality, sizeof m->quality, "%s", a->so.quality ? a->so.quality : "preview");
-    m->fps = set->fps;
-    m->frames = nframes;
-    m->files = SM_RUNFILE_RENDER | SM_RUNFILE_POSES | SM_RUNFILE_CHECKPOINTS | (set->out_vtk ? SM_RUNFILE_PVD : 0u) |
-               (set->out_csv ? SM_RUNFILE_CSV : 0u) | (a->video ? SM_RUNFILE_VIDEO : 0u);
+    const sm_run_request r = run_request(a, hash, nframes);
+    sm_run_describe(&r, set, m);
 }
 
 static int run_command(int argc, char **argv) {
@@ -373,7 +335,7 @@ static int run_command(int argc, char **argv) {
     }
     if (st == SM_OK) st = prepare_folder(out);
     const uint64_t hash = scene_hash(&a.so);
-    if (a.ckpt_every < 0) a.ckpt_every = set->checkpoint_every >= 0 ? set->checkpoint_every : CLI_CHECKPOINT_EVERY;
+    a.ckpt_every = sm_run_checkpoint_every(a.ckpt_every, set);
     int first = 0;
     sm_run_manifest manifest;
     describe_run(&a, set, hash, nframes, &manifest);

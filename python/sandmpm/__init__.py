@@ -9,13 +9,17 @@
 
 The classes are thin: their keywords are the fields of the C definitions (sandmpm.h) with the same
 names and defaults. Particle state (World.positions, velocities, B, F, q, alpha, material, volume)
-is NumPy views of the library's memory, valid until the next step. See docs/python.md.
+is NumPy views of the library's memory, valid until the next step. Lua scene files: load_scene(path,
+quality=..., **params) and Scene.run(out), the outputs of `sandmpm run`; render() draws a frame or
+a world into a NumPy image. See docs/python.md.
 """
 from ._ffi import Error, Status, ffi, lib, library_path, real_dtype, status_string
 from ._views import ParticleArray
 from .collider import Collider
 from .emitter import Emitter
+from .frame import Frame, frame_from_world, read_frame, render, write_ply, write_png
 from .material import Material
+from .scene import Scene, load_scene
 from .shapes import Shape, axis_angle
 from .world import World
 
@@ -42,5 +46,6 @@ def stage_names():
 
 
 __all__ = ["World", "Material", "Shape", "Collider", "Emitter", "Error", "Status", "ParticleArray", "axis_angle",
+           "Scene", "load_scene", "Frame", "read_frame", "frame_from_world", "write_ply", "render", "write_png",
            "allocation_count", "particle_bytes", "stage_names", "status_string", "real_dtype", "real_is_double",
            "library_path", "__version__"]

@@ -1,9 +1,11 @@
 """The library, loaded with cffi in ABI mode, and the error type.
 
 The declarations are _cdef.h, which the build makes from include/sandmpm/sandmpm.h (python/cdef.cmake),
-so they are the header's own. The library is found, in this order, at $SANDMPM_LIBRARY, at the path
-_paths.py names (the build tree's libsandmpm.so, or the installed one relative to this package),
-and by the system's library search (libsandmpm.so.0).
+so they are the header's own, and _cdef_app.h from the application layer's headers (app/). The
+library is found, in this order, at $SANDMPM_LIBRARY, at the path _paths.py names (the build tree's
+libsandmpm.so, or the installed one relative to this package), and by the system's library search
+(libsandmpm.so.0); the application layer's (_app.py) the same way, at $SANDMPM_APP_LIBRARY or
+libsandmpm_app.so.0.
 """
 import enum
 import os
@@ -16,17 +18,24 @@ _here = os.path.dirname(os.path.abspath(__file__))
 ffi = cffi.FFI()
 with open(os.path.join(_here, "_cdef.h")) as _f:
     ffi.cdef(_f.read())
+# The application layer's declarations (frames, renderer, scene loader, a scene's run), whose
+# library (libsandmpm_app.so) is loaded on first use (_app.py).
+with open(os.path.join(_here, "_cdef_app.h")) as _f:
+    ffi.cdef(_f.read())
 
 
-def _library_path():
-    env = os.environ.get("SANDMPM_LIBRARY")
+def _library_path(env_name="SANDMPM_LIBRARY", attr="LIBRARY", soname="libsandmpm.so.0"):
+    env = os.environ.get(env_name)
     if env:
         return env
     try:
         from . import _paths
     except ImportError:
-        return "libsandmpm.so.0"
-    path = os.path.join(_here, _paths.LIBRARY) if _paths.RELATIVE else _paths.LIBRARY
+        return soname
+    where = getattr(_paths, attr, None)
+    if where is None:
+        return soname
+    path = os.path.join(_here, where) if _paths.RELATIVE else where
     return os.path.normpath(path)
 
 

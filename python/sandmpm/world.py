@@ -41,6 +41,18 @@ class _Native:
             pass
 
 
+class _Borrowed(_Native):
+    """The pointer of a world that another object owns (a Scene's): never destroyed here; `keep`
+    holds the owner's handle, so the owner's memory lives as long as this handle (the World or a
+    particle array over it)."""
+
+    __slots__ = ()
+
+    def destroy(self):
+        self.ptr = None
+        self.keep = []
+
+
 class World:
     """A simulation world. The keywords are the fields of sm_world_def with the same names and
     defaults (see help(World) or World.defaults()); enum fields take strings ("cubic", "flip",
@@ -72,6 +84,20 @@ class World:
         self._materials = {}  # Material -> id in this world
         self._motions = []
         self.dim = d.dim
+
+    @classmethod
+    def _borrow(cls, ptr, owner):
+        """A World over a world owned by `owner` (a native handle kept alive by this World and its
+        arrays; the owner frees the world when the last of them goes)."""
+        self = cls.__new__(cls)
+        native = _Borrowed(ptr)
+        native.keep.append(owner)
+        self._native = native
+        self._views = ViewTracker(native)
+        self._materials = {}
+        self._motions = []
+        self.dim = lib.sm_world_get_def(ptr).dim
+        return self
 
     @staticmethod
     def defaults():

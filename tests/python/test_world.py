@@ -84,11 +84,17 @@ def test_installed_package_finds_the_installed_library(tmp_path):
     assert len(pkgs) == 1
     env = dict(os.environ, PYTHONPATH=str(pkgs[0].parent.parent))
     env.pop("SANDMPM_LIBRARY", None)
-    code = ("import sandmpm as sm; w = sm.World(dim=2, dx=0.05); "
+    env.pop("SANDMPM_APP_LIBRARY", None)
+    scene = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenes", "block2d.lua")
+    code = ("import sandmpm as sm, sandmpm._app as a; w = sm.World(dim=2, dx=0.05); "
             "w.seed(sm.Shape.sphere((0.5, 0.5), 0.1), sm.Material.sand()); w.step(); "
-            "print(sm.__file__); print(sm.library_path); print(len(w))")
+            "print(sm.__file__); print(sm.library_path); print(len(w)); "
+            "s = sm.load_scene(%r); print(a.app_library_path()); print(s.run('out', frames=1)['frames_written'])"
+            % scene)
     out = subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, text=True,
                          cwd=str(tmp_path)).stdout.split()
     assert out[0].startswith(str(prefix)) and out[1].startswith(str(prefix))
     assert os.path.basename(out[1]) == "libsandmpm.so.0" and int(out[2]) > 0
+    assert out[3].startswith(str(prefix)) and os.path.basename(out[3]) == "libsandmpm_app.so.0"
+    assert out[4] == "2" and (tmp_path / "out" / "frame_0001.ply").exists()
     assert not SANITIZED or "LD_PRELOAD" in env

@@ -154,8 +154,31 @@ int main(void) {
         sd.ppc = dim == 2 ? 16 : 27;
         sd.angular_velocity[2] = 2.0;
         size_t added = 0;
-        CHECK(sm_world_seed_shape(w, &s, &sd, &added) == SM_OK);
+        /* malformed shapes are refused before anything is seeded or emitted (issue 12: the checkpoint
+         * fuzzer reached emitters with a NaN centre, zero sizes and a zero rotation) */
+        sm_shape bad = s;
+        bad.center[1] = NAN;
+        CHECK(sm_world_seed_shape(w, &bad, &sd, &added) == SM_ERR_INVALID);
+        CHECK_MSG(sm_world_errmsg(w), "seed shape.center: must be finite");
+        sm_seed_def sd_clip = sd;
+        sm_shape clip = sm_shape_default(SM_SHAPE_BOX); /* half_extent 0 */
+        sd_clip.clip = &clip;
+        CHECK(sm_world_seed_shape(w, &s, &sd_clip, &added) == SM_ERR_INVALID);
+        CHECK_MSG(sm_world_errmsg(w), "seed clip.half_extent: must be > 0");
+        sm_emitter_def em = sm_emitter_def_default();
+        em.material = sand;
+        em.shape = s;
+        em.shape.rotation[0] = 0;
+        CHECK(sm_world_add_emitter(w, &em, NULL) == SM_ERR_INVALID);
+        CHECK_MSG(sm_world_errmsg(w), "emitter shape.rotation: must be a unit quaternion");
+        em.shape = s;
+        em.shape.radius = 0;
+        CHECK(sm_world_add_emitter(w, &em, NULL) == SM_ERR_INVALID);
+        CHECK_MSG(sm_world_errmsg(w), "emitter shape.radius: must be > 0");
         sm_diagnostics d;
+        sm_world_diagnostics(w, &d);
+        CHECK(d.particles == 0 && added == 0);
+        CHECK(sm_world_seed_shape(w, &s, &sd, &added) == SM_OK);
         sm_world_diagnostics(w, &d);
         double vol = dim == 2 ? SM_PI_TEST * 0.04 : 4.0 / 3.0 * SM_PI_TEST * 0.008;
         double mass = 2200 * vol;

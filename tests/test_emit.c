@@ -1,6 +1,8 @@
 /* Emitters: the emitted mass follows rate * (time active) to within one particle, nothing is
  * emitted outside [start, stop], total mass in the diagnostics matches, emission is deterministic
- * (same hash for 1 and 2 threads), and bad emitter definitions are refused with a message. */
+ * (same hash for 1 and 2 threads), and bad emitter definitions are refused with a message; a shape
+ * is refused for "no volume inside the usable domain" exactly when sm_shape_volume_estimate over that
+ * domain is 0 (the emitter's early-exit search visits the same lattice). */
 #include <string.h>
 
 #include "test_util.h"
@@ -75,6 +77,58 @@ static uint64_t run(int dim, int threads, double *emitted, double *mass, double 
     return h;
 }
 
+/* Small spheres, boxes and cylinders, some rotated, scattered over and around the domain: the emitter accepts one
+ * exactly when the volume estimate over the usable domain (domain shrunk by 2 dx) is positive. */
+static void volume_check(int dim) {
+    sm_world_def def = sm_world_def_default();
+    def.dim = dim;
+    def.dx = 0.05;
+    sm_world *w = NULL;
+    char err[256];
+    CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_OK);
+    if (!w) return;
+    sm_material_def m = sm_material_def_sand();
+    int mat = -1;
+    CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}, h = 1;
+    for (int a = 0; a < dim; a++) {
+        lo[a] = def.domain_min[a] + 2 * def.dx;
+        hi[a] = def.domain_max[a] - 2 * def.dx;
+        h = fmin(h, (hi[a] - lo[a]) / 64);
+    }
+    int accepted = 0, refused = 0, agree = 1;
+    uint64_t key = 12345;
+    for (int t = 0; t < 400; t++) {
+        sm_emitter_def e = sm_emitter_def_default();
+        e.material = mat;
+        const sm_shape_kind kinds[3] = {SM_SHAPE_SPHERE, SM_SHAPE_BOX, SM_SHAPE_CYLINDER};
+        e.shape = sm_shape_default(kinds[t % 3]);
+        for (int a = 0; a < dim; a++) {
+            key = key * 6364136223846793005u + 1442695040888963407u;
+            const double u = (double)(key >> 11) / 9007199254740992.0;
+            e.shape.center[a] = def.domain_min[a] + (u * 1.2 - 0.1) * (def.domain_max[a] - def.domain_min[a]);
+            e.shape.half_extent[a] = (0.2 + 0.8 * u) * h;
+        }
+        e.shape.radius = 0.3 * h + (double)(t % 5) * 0.2 * h;
+        e.shape.half_height = e.shape.radius * (1 + t % 4);
+        if (t % 6 >= 3) { /* rotated about z by 0.3 rad (2D), about (1, 1, 1) / sqrt 3 (3D) */
+            const double c = cos(0.15), sn = sin(0.15);
+            e.shape.rotation[0] = c;
+            for (int a = 1; a < 4; a++) e.shape.rotation[a] = dim == 2 ? (a == 3 ? sn : 0) : sn / sqrt(3.0);
+        }
+        const double vol = sm_shape_volume_estimate(&e.shape, NULL, dim, lo, hi);
+        const sm_status st = sm_world_add_emitter(w, &e, NULL);
+        if ((st == SM_OK) != (vol > 0)) agree = 0;
+        if (st == SM_OK) accepted++;
+        else refused++;
+    }
+    printf("%dD: %d small shapes accepted, %d refused, acceptance %s the volume estimate\n", dim, accepted,
+           refused, agree ? "agrees with" : "DISAGREES with");
+    CHECK(agree);
+    CHECK(accepted > 40 && refused > 40);
+    sm_world_destroy(w);
+}
+
 int main(void) {
     for (int dim = 2; dim <= 3; dim++) {
         double em, mass, pm, em2, mass2, pm2;
@@ -91,5 +145,7 @@ int main(void) {
         CHECK(h1 == h2);
         CHECK(h1 != 0);
     }
+    volume_check(2);
+    volume_check(3);
     return sm_test_summary("test_emit");
 }

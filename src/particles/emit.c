@@ -122,6 +122,49 @@ static int emitter_bounds(const sm_shape *s, int dim, const double lo[3], const 
     return 1;
 }
 
+/* Point n of a (2^bits)^dim block in coarse-to-fine order: n's bits * dim bits reversed and
+ * de-interleaved into the axes, so points 0 .. 2^dim - 1 are the block's coarsest corners, the next
+ * ones halve that spacing, and so on; n -> (i, j, k) is a bijection. */
+static void coarse_to_fine(unsigned n, int bits, int dim, int idx[3]) {
+    const int total = bits * dim;
+    unsigned r = 0;
+    for (int b = 0; b < total; b++) r |= ((n >> b) & 1u) << (total - 1 - b);
+    idx[0] = idx[1] = idx[2] = 0;
+    for (int b = 0; b < bits; b++)
+        for (int a = 0; a < dim; a++) idx[a] |= (int)((r >> (b * dim + a)) & 1u) << b;
+}
+
+/* sm_shape_volume_estimate(shape, NULL, dim, lo, hi) > 0, stopping at the first inside point of
+ * the same 64^dim lattice, and visiting only its points inside the shape's box [bmin, bmax] (which
+ * holds every inside point: the emitter samples there), coarse to fine: a shape is found after a
+ * few evaluations, a shape with no lattice point inside is refused after its box's points, instead
+ * of up to 262,144 evaluations either way (a checkpoint's load adds its emitters again). */
+static int shape_has_volume(const sm_shape *shape, int dim, const double lo[3], const double hi[3],
+                            const double bmin[3], const double bmax[3]) {
+    const int N = 64;
+    double h[3] = {0, 0, 0};
+    int first[3] = {0, 0, 0}, count[3] = {1, 1, 1}, bits = 0;
+    for (int a = 0; a < dim; a++) {
+        if (!(hi[a] > lo[a])) return 0;
+        h[a] = (hi[a] - lo[a]) / N; /* point i at lo + (i + 0.5) h */
+        const double i0 = floor((bmin[a] - lo[a]) / h[a] - 0.5), i1 = ceil((bmax[a] - lo[a]) / h[a] - 0.5);
+        first[a] = (int)fmax(0, i0);
+        count[a] = (int)fmin(N - 1, i1) - first[a] + 1;
+        if (count[a] <= 0) return 0;
+        while ((1 << bits) < count[a]) bits++;
+    }
+    const unsigned total = 1u << (bits * dim);
+    for (unsigned n = 0; n < total; n++) {
+        int idx[3];
+        coarse_to_fine(n, bits, dim, idx);
+        if (idx[0] >= count[0] || idx[1] >= count[1] || idx[2] >= count[2]) continue;
+        double x[3] = {0, 0, 0};
+        for (int a = 0; a < dim; a++) x[a] = lo[a] + (first[a] + idx[a] + 0.5) * h[a];
+        if (sm_shape_distance(shape, dim, x, NULL) < 0) return 1;
+    }
+    return 0;
+}
+
 sm_status sm_world_add_emitter(sm_world *w, const sm_emitter_def *e, int *id) {
     if (id) *id = -1;
     if (!e) return sm_world_fail(w, SM_ERR_INVALID, "emitter definition is NULL");
@@ -140,11 +183,14 @@ sm_status sm_world_add_emitter(sm_world *w, const sm_emitter_def *e, int *id) {
     }
     if (e->shape.kind == SM_SHAPE_MESH && (!e->shape.mesh || sm_mesh_field_get_stats(e->shape.mesh)->dim != w->dim))
         return sm_world_fail(w, SM_ERR_INVALID, "emitter shape: a mesh shape needs a field of the world's dimension");
+    char msg[256];
+    if (!sm_shape_check(&e->shape, w->dim, "emitter shape", msg, sizeof msg))
+        return sm_world_fail(w, SM_ERR_INVALID, "%s", msg);
     if (!emitter_bounds(&e->shape, w->dim, lo, hi, bmin, bmax))
         return sm_world_fail(w, SM_ERR_INVALID,
                              "emitter shape: must be a sphere, box, cylinder or closed mesh (not inside-out, not a "
                              "container) inside the domain");
-    if (!(sm_shape_volume_estimate(&e->shape, NULL, w->dim, lo, hi) > 0))
+    if (!shape_has_volume(&e->shape, w->dim, lo, hi, bmin, bmax))
         return sm_world_fail(w, SM_ERR_INVALID, "emitter shape: has no volume inside the usable domain");
     if (e->shape.kind == SM_SHAPE_MESH) { /* rejection sampling gives up after 1000 tries: P < 2e-9 */
         double box = 1;

@@ -262,6 +262,10 @@ sm_status sm_world_seed_shape(sm_world *w, const sm_shape *shape, const sm_seed_
             return sm_world_fail(w, SM_ERR_INVALID, "seed %s: a mesh shape needs a field of the world's dimension",
                                  k ? "clip" : "shape");
     }
+    char msg[256];
+    if (!sm_shape_check(shape, w->dim, "seed shape", msg, sizeof msg) ||
+        (sd->clip && !sm_shape_check(sd->clip, w->dim, "seed clip", msg, sizeof msg)))
+        return sm_world_fail(w, SM_ERR_INVALID, "%s", msg);
     const int d = w->dim;
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}, bmin[3], bmax[3];
     for (int a = 0; a < d; a++) {

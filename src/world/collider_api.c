@@ -1,42 +1,43 @@
 /* The collider API of the world: the checks of a definition (the library's limits, usable
  * without a world), adding a collider (before the domain walls, which stay last; it retains its
  * mesh fields until the world is destroyed), queries. */
+#include <stdio.h>
 #include <string.h>
 
 #include "world/world.h"
 
-static int check_shape(const sm_shape *s, int dim, int idx, char *err, size_t errlen) {
+int sm_shape_check(const sm_shape *s, int dim, const char *name, char *err, size_t errlen) {
     double c3[3] = {s->center[0], s->center[1], s->center[2]};
-    if (!sm_finite3(c3)) return (sm_check_fail(err, errlen, "shapes[%d].center: must be finite", idx), 0);
+    if (!sm_finite3(c3)) return (sm_check_fail(err, errlen, "%s.center: must be finite", name), 0);
     switch (s->kind) {
     case SM_SHAPE_HALFSPACE: {
         double nn = s->normal[0] * s->normal[0] + s->normal[1] * s->normal[1] + (dim == 3 ? s->normal[2] * s->normal[2] : 0);
-        if (!(nn > 0) || !isfinite(nn)) return (sm_check_fail(err, errlen, "shapes[%d].normal: must be a finite non-zero vector", idx), 0);
+        if (!(nn > 0) || !isfinite(nn)) return (sm_check_fail(err, errlen, "%s.normal: must be a finite non-zero vector", name), 0);
         break;
     }
     case SM_SHAPE_BOX:
         for (int a = 0; a < dim; a++)
             if (!(s->half_extent[a] > 0) || !isfinite(s->half_extent[a]))
-                return (sm_check_fail(err, errlen, "shapes[%d].half_extent: must be > 0, got %g", idx, s->half_extent[a]), 0);
+                return (sm_check_fail(err, errlen, "%s.half_extent: must be > 0, got %g", name, s->half_extent[a]), 0);
         break;
     case SM_SHAPE_SPHERE:
-        if (!(s->radius > 0) || !isfinite(s->radius)) return (sm_check_fail(err, errlen, "shapes[%d].radius: must be > 0, got %g", idx, s->radius), 0);
+        if (!(s->radius > 0) || !isfinite(s->radius)) return (sm_check_fail(err, errlen, "%s.radius: must be > 0, got %g", name, s->radius), 0);
         break;
     case SM_SHAPE_CYLINDER:
-        if (!(s->radius > 0) || !isfinite(s->radius)) return (sm_check_fail(err, errlen, "shapes[%d].radius: must be > 0, got %g", idx, s->radius), 0);
-        if (!(s->half_height > 0) || !isfinite(s->half_height)) return (sm_check_fail(err, errlen, "shapes[%d].half_height: must be > 0, got %g", idx, s->half_height), 0);
+        if (!(s->radius > 0) || !isfinite(s->radius)) return (sm_check_fail(err, errlen, "%s.radius: must be > 0, got %g", name, s->radius), 0);
+        if (!(s->half_height > 0) || !isfinite(s->half_height)) return (sm_check_fail(err, errlen, "%s.half_height: must be > 0, got %g", name, s->half_height), 0);
         break;
     case SM_SHAPE_MESH:
-        if (!s->mesh) return (sm_check_fail(err, errlen, "shapes[%d].mesh: a mesh shape needs a field (sm_mesh_field_create)", idx), 0);
+        if (!s->mesh) return (sm_check_fail(err, errlen, "%s.mesh: a mesh shape needs a field (sm_mesh_field_create)", name), 0);
         if (sm_mesh_field_get_stats(s->mesh)->dim != dim)
-            return (sm_check_fail(err, errlen, "shapes[%d].mesh: a %dD field in a %dD world", idx,
+            return (sm_check_fail(err, errlen, "%s.mesh: a %dD field in a %dD world", name,
                                   sm_mesh_field_get_stats(s->mesh)->dim, dim), 0);
         break;
-    default: return (sm_check_fail(err, errlen, "shapes[%d].kind: unknown value %d", idx, (int)s->kind), 0);
+    default: return (sm_check_fail(err, errlen, "%s.kind: unknown value %d", name, (int)s->kind), 0);
     }
     double qn = 0;
     for (int k = 0; k < 4; k++) qn += s->rotation[k] * s->rotation[k];
-    if (!(fabs(qn - 1) < 1e-6)) return (sm_check_fail(err, errlen, "shapes[%d].rotation: must be a unit quaternion (|q|^2 = %g)", idx, qn), 0);
+    if (!(fabs(qn - 1) < 1e-6)) return (sm_check_fail(err, errlen, "%s.rotation: must be a unit quaternion (|q|^2 = %g)", name, qn), 0);
     return 1;
 }
 
@@ -45,8 +46,11 @@ sm_status sm_collider_def_check(const sm_collider_def *c, int dim, char *err, si
     if (dim != 2 && dim != 3) return sm_check_fail(err, errlen, "collider check: dim must be 2 or 3, got %d", dim);
     if (c->shape_count < 1 || c->shape_count > SM_MAX_COLLIDER_SHAPES)
         return sm_check_fail(err, errlen, "collider shapes: need 1 to %d, got %d", SM_MAX_COLLIDER_SHAPES, c->shape_count);
-    for (int i = 0; i < c->shape_count; i++)
-        if (!check_shape(&c->shapes[i], dim, i, err, errlen)) return SM_ERR_INVALID;
+    for (int i = 0; i < c->shape_count; i++) {
+        char name[32];
+        snprintf(name, sizeof name, "shapes[%d]", i);
+        if (!sm_shape_check(&c->shapes[i], dim, name, err, errlen)) return SM_ERR_INVALID;
+    }
     if (c->mode != SM_COLLIDE_STICKY && c->mode != SM_COLLIDE_SLIP && c->mode != SM_COLLIDE_SEPARATE)
         return sm_check_fail(err, errlen, "collider mode: unknown value %d", (int)c->mode);
     if (!(c->friction >= 0) || !isfinite(c->friction))

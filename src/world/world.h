@@ -124,6 +124,11 @@ sm_status sm_check_fail(char *err, size_t errlen, const char *fmt, ...)
 #endif
     ;
 
+/* 1 if the shape is well formed for a dim-D world (finite centre; positive, finite sizes of its
+ * kind; a non-zero normal; a unit rotation; a mesh field of that dimension), else 0 with
+ * "NAME.field: ..." in err (collider shapes, emitter shapes, seeded shapes and their clips). */
+int sm_shape_check(const sm_shape *s, int dim, const char *name, char *err, size_t errlen);
+
 static inline int sm_finite3(const double v[3]) { return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
 
 /* Threads for a def.threads value (0: OpenMP's default). */

@@ -17,7 +17,7 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-#define FUZZ_BUILD_BYTES ((size_t)4 << 20) /* build the world only below this estimate */
+#define FUZZ_BUILD_BYTES ((size_t)1 << 20) /* build the world only below this estimate (1 MB: a few thousand particles) */
 
 static void fuzz_fail(const char *what, const char *err) {
     fprintf(stderr, "fuzz_scene: %s (message: \"%s\")\n", what, err);

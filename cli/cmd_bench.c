@@ -11,6 +11,7 @@
 #include "app/bench.h"
 #include "app/io/files.h"
 #include "app/io/spawn.h"
+#include "cli/bench_load.h"
 #include "cli/cli.h"
 
 #define BENCH_MAX_THREADS 16
@@ -25,6 +26,7 @@ typedef struct bench_opts {
     int csv, header;
     int raw;      /* hidden: the sibling's mode, lossless rows (app/bench.h) and only this precision */
     int progress; /* a progress line on stderr */
+    int load;     /* busy processes beside each case (--load) */
 } bench_opts;
 
 /* Splits a comma list into at most max items of at most 31 characters. Returns the count or -1. */
@@ -101,6 +103,12 @@ static int parse_number_option(const char *a, const char *v, bench_opts *o) {
         fprintf(stderr, "sandmpm bench: --steps: expected a whole number >= 1, got \"%s\"\n", v);
         return -1;
     }
+    if (!strcmp(a, "--load")) {
+        if (cli_parse_int(v, 0, BENCH_MAX_LOAD, &o->load)) return 1;
+        fprintf(stderr, "sandmpm bench: --load: expected a whole number of busy processes 0..%d, got \"%s\"\n",
+                BENCH_MAX_LOAD, v);
+        return -1;
+    }
     if (!strcmp(a, "--warmup")) {
         if (cli_parse_int(v, 0, 1000000, &o->c.warmup)) return 1;
         fprintf(stderr, "sandmpm bench: --warmup: expected a whole number >= 0, got \"%s\"\n", v);
@@ -133,7 +141,8 @@ static sm_status bench_parse(int argc, char **argv, bench_opts *o) {
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i];
         int takes = !strcmp(a, "--dim") || !strcmp(a, "--precision") || !strcmp(a, "--threads") ||
-                    !strcmp(a, "--particles") || !strcmp(a, "--steps") || !strcmp(a, "--warmup");
+                    !strcmp(a, "--particles") || !strcmp(a, "--steps") || !strcmp(a, "--warmup") ||
+                    !strcmp(a, "--load");
         if (takes && i + 1 >= argc) {
             fprintf(stderr, "sandmpm bench: %s needs a value (see sandmpm bench --help)\n", a);
             return SM_ERR_INVALID;
@@ -178,7 +187,12 @@ static sm_status bench_local(const bench_opts *o) {
                               c.threads, c.threads == 1 ? "" : "s", c.particles, c.warmup, c.steps);
             sm_bench_result r;
             char err[1024];
-            sm_status rc = sm_bench_run(&c, &r, err, sizeof err);
+            pid_t busy[BENCH_MAX_LOAD];
+            sm_status rc = bench_load_start(o->load, busy, err, sizeof err) ? SM_OK : SM_ERR_IO;
+            if (rc == SM_OK) {
+                rc = sm_bench_run(&c, &r, err, sizeof err);
+                bench_load_stop(o->load, busy);
+            }
             if (o->progress && len > 0) fprintf(stderr, "\r%*s\r", len, "");
             if (rc != SM_OK) {
                 fprintf(stderr, "sandmpm bench: %dD %s, %d thread%s: %s\n", dim, prec, c.threads,
@@ -212,8 +226,8 @@ static int bench_sibling(char *path, size_t len) {
 
 /* The sibling's arguments for this run's cases of the other precision (strings in bufs). */
 typedef struct sibling_args {
-    char dims[8], threads[BENCH_MAX_THREADS * 6], particles[32], steps[16], warmup[16];
-    char *argv[20];
+    char dims[8], threads[BENCH_MAX_THREADS * 6], particles[32], steps[16], warmup[16], load[16];
+    char *argv[22];
 } sibling_args;
 
 static void sibling_argv(const bench_opts *o, const char *path, const char *prec, sibling_args *sa) {
@@ -227,9 +241,11 @@ static void sibling_argv(const bench_opts *o, const char *path, const char *prec
     snprintf(sa->particles, sizeof sa->particles, "%.17g", o->c.particles);
     snprintf(sa->steps, sizeof sa->steps, "%d", o->c.steps);
     snprintf(sa->warmup, sizeof sa->warmup, "%d", o->c.warmup);
-    char *args[] = {(char *)path, "bench",       "--sibling-rows", "--precision", (char *)prec,  "--dim",
-                    sa->dims,     "--threads",   sa->threads,      "--particles", sa->particles, "--steps",
-                    sa->steps,    "--warmup",    sa->warmup,       o->progress ? "--sibling-progress" : NULL, NULL};
+    snprintf(sa->load, sizeof sa->load, "%d", o->load);
+    char *args[] = {(char *)path, "bench",     "--sibling-rows", "--precision", (char *)prec,  "--dim",
+                    sa->dims,     "--threads", sa->threads,      "--particles", sa->particles, "--steps",
+                    sa->steps,    "--warmup",  sa->warmup,       "--load",      sa->load,
+                    o->progress ? "--sibling-progress" : NULL, NULL};
     memcpy(sa->argv, args, sizeof args);
 }
 
@@ -326,7 +342,10 @@ static sm_status bench_command(int argc, char **argv) {
         o.prec_mask = own;
     }
     if (o.csv && o.header) sm_bench_csv_header(stdout);
-    if (!o.csv && !o.raw) sm_bench_table_header(stdout, &o.c);
+    if (!o.csv && !o.raw) {
+        if (o.load) printf("each case beside %d busy process%s (--load)\n", o.load, o.load == 1 ? "" : "es");
+        sm_bench_table_header(stdout, &o.c);
+    }
     fflush(stdout);
     for (int p = 1; p <= 2 && rc == SM_OK; p++) { /* float, then double */
         if (!(o.prec_mask & p)) continue;

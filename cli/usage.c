@@ -76,7 +76,7 @@ void cli_usage_render(FILE *f) {
 
 void cli_usage_bench(FILE *f) {
     fprintf(f, "usage: sandmpm bench [--dim 2,3] [--precision float,double] [--threads 1,2] [--particles N]\n"
-               "                     [--steps S] [--warmup W] [--csv [--no-header]]\n\n"
+               "                     [--steps S] [--warmup W] [--load N] [--csv [--no-header]]\n\n"
                "Measures the explicit step on a block of sand collapsing onto a sticky ground (hardening,\n"
                "quadratic kernel, APIC, every stage; 8 particles per cell in 3D, 4 in 2D): W warm-up steps,\n"
                "then S measured steps per case, one case per dimension, precision and thread count. Prints\n"
@@ -88,6 +88,7 @@ void cli_usage_bench(FILE *f) {
                "  --particles N      particles per case, about (default 1e6; at least 100)\n"
                "  --steps S          measured steps (default 20)\n"
                "  --warmup W         unmeasured steps before them (default 10)\n"
+               "  --load N           run each case beside N busy processes (a shared machine; default 0)\n"
                "  --csv              one row per case: %s\n"
                "  --no-header        with --csv: no header line\n",
             sm_real_is_double() ? "double" : "float", SM_BENCH_SIBLING[0] ? SM_BENCH_SIBLING : "(none in this build)",

@@ -97,15 +97,14 @@ static void volume_check(int dim) {
         h = fmin(h, (hi[a] - lo[a]) / 64);
     }
     int accepted = 0, refused = 0, agree = 1;
-    uint64_t key = 12345;
+    unsigned long long rng = 12345;
     for (int t = 0; t < 400; t++) {
         sm_emitter_def e = sm_emitter_def_default();
         e.material = mat;
         const sm_shape_kind kinds[3] = {SM_SHAPE_SPHERE, SM_SHAPE_BOX, SM_SHAPE_CYLINDER};
         e.shape = sm_shape_default(kinds[t % 3]);
         for (int a = 0; a < dim; a++) {
-            key = key * 6364136223846793005u + 1442695040888963407u;
-            const double u = (double)(key >> 11) / 9007199254740992.0;
+            const double u = sm_test_uniform(&rng, 0, 1);
             e.shape.center[a] = def.domain_min[a] + (u * 1.2 - 0.1) * (def.domain_max[a] - def.domain_min[a]);
             e.shape.half_extent[a] = (0.2 + 0.8 * u) * h;
         }

@@ -181,9 +181,7 @@ sm_status sm_world_add_emitter(sm_world *w, const sm_emitter_def *e, int *id) {
         lo[a] = w->def.domain_min[a] + 2 * w->def.dx;
         hi[a] = w->def.domain_max[a] - 2 * w->def.dx;
     }
-    if (e->shape.kind == SM_SHAPE_MESH && (!e->shape.mesh || sm_mesh_field_get_stats(e->shape.mesh)->dim != w->dim))
-        return sm_world_fail(w, SM_ERR_INVALID, "emitter shape: a mesh shape needs a field of the world's dimension");
-    char msg[256];
+    char msg[256]; /* sm_shape_check also refuses a mesh shape without a field of the world's dimension */
     if (!sm_shape_check(&e->shape, w->dim, "emitter shape", msg, sizeof msg))
         return sm_world_fail(w, SM_ERR_INVALID, "%s", msg);
     if (!emitter_bounds(&e->shape, w->dim, lo, hi, bmin, bmax))

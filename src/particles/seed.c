@@ -256,13 +256,7 @@ sm_status sm_world_seed_shape(sm_world *w, const sm_shape *shape, const sm_seed_
     for (int a = 0; a < 3; a++)
         if (!isfinite(sd->velocity[a]) || !isfinite(sd->angular_velocity[a]))
             return sm_world_fail(w, SM_ERR_INVALID, "seed velocity: must be finite");
-    for (int k = 0; k < 2; k++) {
-        const sm_shape *s = k ? sd->clip : shape;
-        if (s && s->kind == SM_SHAPE_MESH && (!s->mesh || sm_mesh_field_get_stats(s->mesh)->dim != w->dim))
-            return sm_world_fail(w, SM_ERR_INVALID, "seed %s: a mesh shape needs a field of the world's dimension",
-                                 k ? "clip" : "shape");
-    }
-    char msg[256];
+    char msg[256]; /* sm_shape_check also refuses a mesh shape without a field of the world's dimension */
     if (!sm_shape_check(shape, w->dim, "seed shape", msg, sizeof msg) ||
         (sd->clip && !sm_shape_check(sd->clip, w->dim, "seed clip", msg, sizeof msg)))
         return sm_world_fail(w, SM_ERR_INVALID, "%s", msg);

@@ -30,7 +30,7 @@ int sm_shape_check(const sm_shape *s, int dim, const char *name, char *err, size
     case SM_SHAPE_MESH:
         if (!s->mesh) return (sm_check_fail(err, errlen, "%s.mesh: a mesh shape needs a field (sm_mesh_field_create)", name), 0);
         if (sm_mesh_field_get_stats(s->mesh)->dim != dim)
-            return (sm_check_fail(err, errlen, "%s.mesh: a %dD field in a %dD world", name,
+            return (sm_check_fail(err, errlen, "%s.mesh: a %dD field in a %dD world (a mesh shape needs a field of the world's dimension)", name,
                                   sm_mesh_field_get_stats(s->mesh)->dim, dim), 0);
         break;
     default: return (sm_check_fail(err, errlen, "%s.kind: unknown value %d", name, (int)s->kind), 0);

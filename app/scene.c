@@ -10,6 +10,7 @@
  *   integrator = "explicit" | "implicit"   cfl = (0, 1]   max_dt = s   elastic_cfl = >= 0
  *   newton_tolerance = > 0   newton_max_iterations = 1..1000   gmres_max_iterations = 1..200
  *   gmres_tolerance = (0, 1)                (implicit only; defaults from sm_world_def_default)
+ *   gmres_preconditioner = "none" | "block_jacobi"   (implicit only; default "none")
  *   fps = 24    frames = N | end_time = s (one of them, required)
  *   gravity = {0, -9.81, 0}   seed = whole number >= 0 (1)
  *   static_friction_sticks = bool   particle_projection = bool

@@ -12,7 +12,7 @@ return {
   integrator = params.explicit and "explicit" or "implicit",
   dim = 2, dx = dx, ppc = 4,
   fps = 24, frames = (q == "test") and 2 or 48,
-  max_dt = 7.5e-4,
+  max_dt = params.max_dt or 7.5e-4,
   domain = { min = {0, 0}, max = {4.096, 1.024} },
   gravity = {0, -9.81},
   materials = {

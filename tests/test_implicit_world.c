@@ -22,6 +22,8 @@
 
 #define DX(dim) ((dim) == 2 ? 0.02 : 0.04)
 
+static double youngs = 1e5; /* E of the blocks */
+
 static sm_world *blocks(int dim, sm_integrator integ, int sand, double max_dt, int ground, double elastic_cfl) {
     sm_world_def def = sm_world_def_default();
     def.dim = dim;
@@ -37,7 +39,7 @@ static sm_world *blocks(int dim, sm_integrator integ, int sand, double max_dt, i
     char err[256];
     if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) return NULL;
     sm_material_def m = sand ? sm_material_def_sand() : sm_material_def_elastic();
-    m.youngs_modulus = 1e5;
+    m.youngs_modulus = youngs;
     int mat = -1;
     CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
     sm_shape b = sm_shape_default(SM_SHAPE_BOX);
@@ -68,8 +70,50 @@ static sm_world *blocks(int dim, sm_integrator integ, int sand, double max_dt, i
     return w;
 }
 
+/* The block-Jacobi preconditioner: a sand block (E = 1e6) landed on a sticky ground, stepped at
+ * 5e-3 s (about 15x its explicit limit) with and without it from the same state. The first
+ * step's particle velocities agree to the Newton tolerance (both solves meet it). The iteration
+ * counts are printed, not asserted: block Jacobi saved GMRES iterations in 3D and cost some in
+ * 2D here (docs/benchmarks.md), so it is off by default. */
+static void preconditioner(int dim) {
+    youngs = 1e6;
+    sm_world *w[2];
+    for (int k = 0; k < 2; k++) {
+        w[k] = blocks(dim, SM_INTEGRATOR_IMPLICIT, 1, 1e-3, 1, 0);
+        CHECK(w[k] != NULL);
+        w[k]->def.gmres_preconditioner = 0;
+        CHECK(sm_world_advance(w[k], 0.05) == SM_OK);
+        w[k]->def.gmres_preconditioner = k;
+    }
+    youngs = 1e5;
+    const double dt = 5e-3;
+    uint64_t gmres[2], newton[2];
+    double vdiff = 0;
+    for (int k = 0; k < 2; k++) {
+        gmres[k] = w[k]->newton.gmres_total;
+        newton[k] = w[k]->newton.newton_total;
+    }
+    for (int s = 0; s < 10; s++) {
+        for (int k = 0; k < 2; k++) CHECK(sm_world_step(w[k], dt) == SM_OK);
+        if (s == 0)
+            for (size_t i = 0; i < w[0]->p.n * (size_t)dim; i++)
+                vdiff = fmax(vdiff, fabs((double)w[0]->p.v[i] - (double)w[1]->p.v[i]));
+    }
+    for (int k = 0; k < 2; k++) {
+        gmres[k] = w[k]->newton.gmres_total - gmres[k];
+        newton[k] = w[k]->newton.newton_total - newton[k];
+    }
+    printf("%dD preconditioner: first step's particle velocities differ by %.2e m/s (tolerance x dt = %.1e); ten steps: "
+           "%llu Newton / %llu GMRES without, %llu / %llu with\n",
+           dim, vdiff, w[0]->def.newton_tolerance * dt, (unsigned long long)newton[0], (unsigned long long)gmres[0],
+           (unsigned long long)newton[1], (unsigned long long)gmres[1]);
+    CHECK(vdiff < 10 * w[0]->def.newton_tolerance * dt);
+    for (int k = 0; k < 2; k++) sm_world_destroy(w[k]);
+}
+
 int main(void) {
     for (int dim = 2; dim <= 3; dim++) {
+        preconditioner(dim);
         /* --- JVP of the residual vs finite differences --- */
         for (int sand = 0; sand < 2; sand++) {
             sm_world *w = blocks(dim, SM_INTEGRATOR_IMPLICIT, sand, 1e-3, 0, 0.5);
@@ -88,16 +132,20 @@ int main(void) {
         /* --- quadratic convergence --- */
         {
             sm_world *w = blocks(dim, SM_INTEGRATOR_IMPLICIT, 0, 2e-3, 0, 0);
-            w->def.gmres_tolerance = 1e-12;
+            CHECK(sm_world_advance(w, 0.06) == SM_OK); /* blocks in contact, stressed */
+            w->def.gmres_tolerance = 1e-12;            /* then one step solved tightly */
             w->def.gmres_max_iterations = 100;
             w->def.newton_tolerance = 1e-9;
-            CHECK(sm_world_advance(w, 0.06) == SM_OK); /* blocks in contact, stressed */
             CHECK(sm_world_step(w, 2e-3) == SM_OK);
             int n = w->newton.last_iterations;
             printf("%dD Newton residuals (m/s^2):", dim);
             for (int i = 0; i <= n && i < 64; i++) printf(" %.3e", w->newton.hist[i]);
             printf("\n");
-            CHECK(n >= 2);
+            /* float: the first Newton step already lands at the rounding floor, where the solve
+             * stops and says so (floor_stops) instead of running to newton_max_iterations */
+            CHECK(n >= (SM_DOUBLE ? 2 : 1));
+            CHECK(w->newton.last_converged);
+            if (!SM_DOUBLE) CHECK(w->newton.floor_stops > 0);
             /* r_{k+1} <= C r_k^2 with C = 10 / r_0 (scale-free): quadratic, not linear. */
             double r0 = w->newton.hist[0];
             int checked = 0;

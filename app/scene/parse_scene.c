@@ -13,7 +13,7 @@
 
 static const char *const keys_top[] = {"dim", "dx", "ppc", "kernel", "transfer", "flip_ratio", "integrator", "cfl",
                                        "max_dt", "elastic_cfl", "newton_tolerance", "newton_max_iterations",
-                                       "gmres_max_iterations", "gmres_tolerance", "fps", "frames", "end_time", "checkpoint_every",
+                                       "gmres_max_iterations", "gmres_tolerance", "gmres_preconditioner", "fps", "frames", "end_time", "checkpoint_every",
                                        "gravity", "seed", "domain",
                                        "static_friction_sticks", "particle_projection", "materials", "objects",
                                        "colliders", "emitters", "outputs", "camera"};
@@ -24,6 +24,7 @@ static const char *const keys_cam[] = {"eye", "target", "up", "fov"};
 static const char *const kernel_names[] = {"quadratic", "cubic"};
 static const char *const transfer_names[] = {"apic", "pic", "flip"};
 static const char *const integrator_names[] = {"explicit", "implicit"};
+static const char *const preconditioner_names[] = {"none", "block_jacobi"};
 
 /* The library's limits on the world definition (sm_world_def_check), reported at the scene's key. */
 static void check_world_def(vctx *v) {
@@ -63,6 +64,7 @@ static double parse_world_numbers(vctx *v, int top) {
     d->gmres_max_iterations =
         (int)sc_int_field(v, top, "gmres_max_iterations", d->gmres_max_iterations, NULL, INT32_MIN, INT32_MAX);
     d->gmres_tolerance = sc_num_field(v, top, "gmres_tolerance", d->gmres_tolerance, NULL, SC_NOLIM);
+    d->gmres_preconditioner = sc_enum_field(v, top, "gmres_preconditioner", preconditioner_names, 2, d->gmres_preconditioner);
     sc_vec_field(v, top, "gravity", d->gravity);
     if (d->dim == 2) d->gravity[2] = 0;
     double g = sqrt(d->gravity[0] * d->gravity[0] + d->gravity[1] * d->gravity[1] + d->gravity[2] * d->gravity[2]);

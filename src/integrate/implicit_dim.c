@@ -8,9 +8,13 @@
  *   initial guess: the better (smaller residual) of the explicit predictor
  *     v^n + FORCE_INCREMENT_VEL(v^n) and v^n + dt g, collided;
  *   Newton: y = y(z) pruned; stop when sqrt(sum m |y|^2 / sum m) < newton_tolerance dt (after at
- *     least one step) or after newton_max_iterations; solve J dz = -y by GMRES (x0 = 0,
+ *     least one step), or when it is below the rounding floor 32 eps sqrt(sum m |terms|^2 / sum m)
+ *     (eps of sm_real; the terms z, v^n, dt g, dt f / m of y: counted in floor_stops, so a float
+ *     build does not iterate on rounding noise), or after newton_max_iterations (not converged: the
+ *     step driver refuses the dt and retries at half of it); solve J dz = -y by GMRES (x0 = 0,
  *     mass-weighted inner product, modified Gram-Schmidt, Givens rotations, at most
- *     gmres_max_iterations, relative tolerance gmres_tolerance); z = GRID_COLLISIONS(z + s dz)
+ *     gmres_max_iterations, relative tolerance max(gmres_tolerance, 16 eps), right-preconditioned
+ *     by block Jacobi if gmres_preconditioner: implicit_precond_dim.c); z = GRID_COLLISIONS(z + s dz)
  *     with s = 1, 1/2, ... (6 tries) until the residual norm decreases;
  *   finish (lines 3-5): v-bar = z, v* = v^n + FORCE_INCREMENT_VEL(v-bar),
  *     dv = GRID_COLLISIONS(v*) - v*, v-tilde = FRICTION(v-bar, dv) (collide/grid_collide.h). */
@@ -57,14 +61,20 @@ static void initial_guess(const sm_implicit_sys *s) {
     SM_FN(sm_imp_collide)(s, ws->z);
 }
 
-/* GMRES on J x = b, x0 = 0, mass-weighted inner product, basis in ws->krylov (K + 1 vectors);
- * returns the iterations. Overwrites ws->G (TIMES_DIFF's Hessian products). */
-static int gmres(const sm_implicit_sys *s, const sm_real *b, sm_real *x, int K, double rtol) {
+/* The smallest relative residual GMRES is asked for: below a few roundings of sm_real the
+ * Arnoldi estimate keeps falling while the true residual does not. */
+#define GMRES_RTOL_FLOOR (16 * SM_REAL_EPSILON)
+
+/* GMRES on J x = b, x0 = 0, mass-weighted inner product, basis in ws->krylov (K + 1 vectors),
+ * right-preconditioned by M^-1 (ws->pinv) if precond: J M^-1 u = b, x = M^-1 u, the same residual
+ * minimised over another subspace. Returns the iterations. Overwrites ws->G (TIMES_DIFF's
+ * Hessian products) and ws->pz. */
+static int gmres(const sm_implicit_sys *s, const sm_real *b, sm_real *x, int K, double rtol, int precond) {
     sm_implicit_ws *ws = s->ws;
     const size_t N = s->nodes * D;
-    sm_real *V = ws->krylov, *px = ws->aux;
+    sm_real *V = ws->krylov, *px = ws->aux, *pz = ws->pz;
+    if (rtol < GMRES_RTOL_FLOOR) rtol = GMRES_RTOL_FLOOR;
     double H[201][200], cs[200], sn[200], gvec[201];
-    memset(x, 0, N * sizeof(sm_real));
     double beta = sqrt(SM_FN(sm_imp_dot)(s, b, b));
     if (!(beta > 0)) return 0;
     for (size_t k = 0; k < N; k++) V[k] = (sm_real)((double)b[k] / beta);
@@ -73,7 +83,12 @@ static int gmres(const sm_implicit_sys *s, const sm_real *b, sm_real *x, int K, 
     int j = 0;
     for (; j < K; j++) {
         sm_real *vj = V + (size_t)j * N, *wv = V + (size_t)(j + 1) * N;
-        SM_FN(sm_imp_times_diff)(s, vj, wv, px);
+        if (precond) {
+            SM_FN(sm_imp_precond_apply)(s, vj, pz);
+            SM_FN(sm_imp_times_diff)(s, pz, wv, px);
+        } else {
+            SM_FN(sm_imp_times_diff)(s, vj, wv, px);
+        }
         for (int i = 0; i <= j; i++) { /* modified Gram-Schmidt */
             const sm_real *vi = V + (size_t)i * N;
             double h = SM_FN(sm_imp_dot)(s, wv, vi);
@@ -107,10 +122,13 @@ static int gmres(const sm_implicit_sys *s, const sm_real *b, sm_real *x, int K, 
         for (int k = i + 1; k < j; k++) sum -= H[i][k] * yv[k];
         yv[i] = H[i][i] != 0 ? sum / H[i][i] : 0;
     }
+    sm_real *u = precond ? pz : x;
+    memset(u, 0, N * sizeof(sm_real));
     for (int i = 0; i < j; i++) {
         const sm_real *vi = V + (size_t)i * N;
-        for (size_t k = 0; k < N; k++) x[k] += (sm_real)(yv[i] * (double)vi[k]);
+        for (size_t k = 0; k < N; k++) u[k] += (sm_real)(yv[i] * (double)vi[k]);
     }
+    if (precond) SM_FN(sm_imp_precond_apply)(s, u, x);
     return j;
 }
 
@@ -133,32 +151,43 @@ static void line_search(const sm_implicit_sys *s, double a_norm, double tol, dou
     }
 }
 
-/* Newton iterations from ws->z; returns the final residual norm (m/s). */
-static double newton(const sm_implicit_io *io, const sm_implicit_sys *s, double msum) {
+/* The residual's rounding floor (m/s): a few roundings of sm_real of its terms' RMS. Newton
+ * cannot get below it; a tolerance under it is met at the floor (counted in floor_stops). */
+#define NEWTON_FLOOR_ROUNDINGS 32
+
+/* Newton iterations from ws->z; returns the final residual norm (m/s) and whether it met the
+ * tolerance (or the rounding floor) in *converged. */
+static double newton(const sm_implicit_io *io, const sm_implicit_sys *s, double msum, int *converged) {
     sm_implicit_ws *ws = s->ws;
     sm_implicit_stats *st = io->stats;
-    const double dt = s->c->dt, tol = io->newton_tolerance * dt;
+    const double dt = s->c->dt, tol = io->newton_tolerance * dt, mnorm = msum > 0 ? msum : 1;
     const size_t N = s->nodes * D;
     sm_real *rhs = ws->y;
-    int it = 0;
+    int it = 0, at_floor = 0;
     double a_norm = INFINITY;
     for (;; it++) {
         /* NONLINEAR_FUNCTION at z (already collided), with the Algorithm 8 precompute. */
         SM_FN(sm_imp_forces)(s, ws->z, 1);
         SM_FN(sm_imp_residual)(s, ws->z, ws->y);
         SM_FN(sm_imp_project)(s, ws->y, 1);
-        a_norm = sqrt(SM_FN(sm_imp_dot)(s, ws->y, ws->y) / (msum > 0 ? msum : 1));
+        a_norm = sqrt(SM_FN(sm_imp_dot)(s, ws->y, ws->y) / mnorm);
         if (it < (int)(sizeof st->hist / sizeof st->hist[0])) st->hist[it] = a_norm / dt;
-        if ((it > 0 && a_norm < tol) || it >= io->newton_max_iterations) break;
+        if (it > 0 && !(a_norm < tol)) {
+            const double floor = NEWTON_FLOOR_ROUNDINGS * SM_REAL_EPSILON * sqrt(SM_FN(sm_imp_term_scale2)(s, ws->z) / mnorm);
+            at_floor = a_norm < floor;
+        }
+        if ((it > 0 && (a_norm < tol || at_floor)) || it >= io->newton_max_iterations) break;
         for (size_t k = 0; k < N; k++) rhs[k] = -ws->y[k]; /* solve J dz = -y */
-        st->gmres_total += (uint64_t)gmres(s, rhs, ws->dz, io->gmres_max_iterations, io->gmres_tolerance);
+        if (io->precondition) SM_FN(sm_imp_precond_build)(s);
+        st->gmres_total += (uint64_t)gmres(s, rhs, ws->dz, io->gmres_max_iterations, io->gmres_tolerance, io->precondition);
         line_search(s, a_norm, tol, msum);
     }
     st->newton_total += (uint64_t)it;
     st->last_iterations = it;
     st->last_norm = a_norm;
     st->last_residual = a_norm / dt;
-    if (!(a_norm < tol)) st->unconverged++;
+    *converged = a_norm < tol || at_floor;
+    if (at_floor) st->floor_stops++;
     return a_norm;
 }
 
@@ -187,8 +216,15 @@ sm_status SM_FN(sm_implicit_solve)(const sm_implicit_io *io, const sm_step_ctx *
         return SM_ERR_NOMEM;
     const double msum = load_grid(io, &s);
     initial_guess(&s);
-    const double a_norm = newton(io, &s, msum);
+    int converged = 0;
+    const double a_norm = newton(io, &s, msum, &converged);
     if (!isfinite(a_norm)) return SM_ERR_NUMERICAL;
+    io->stats->last_converged = converged;
+    if (!converged && io->may_reject) {
+        io->stats->rejected++;
+        return SM_OK; /* the caller refuses the step: nothing outside the grid has changed */
+    }
+    if (!converged) io->stats->unconverged++;
     finish(io, &s);
     return SM_OK;
 }

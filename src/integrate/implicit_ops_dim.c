@@ -18,6 +18,7 @@
 
 #include <string.h>
 
+#include "core/threads.h"
 #include "integrate/implicit_solver.h"
 #include "transfer/stencil_dim.h"
 
@@ -54,32 +55,40 @@ static inline __attribute__((always_inline)) void gather_T(const sm_implicit_sys
     STENCIL_END
 }
 
-/* out_i = sum_p M_p grad w_ip, with M_p from `mats` (n x DD), scattered in the colour schedule. */
+/* out_i = sum_p M_p grad w_ip, with M_p from `mats` (n x DD), scattered in the colour schedule
+ * with P2G's static particle split (sm_bins_range). */
 static void scatter(const sm_implicit_sys *s, const sm_real *mats, sm_real *out) {
     const int S = s->c->stencil;
     const sm_bins *bins = s->bins;
     memset(out, 0, s->nodes * D * sizeof(sm_real));
-    for (int col = 0; col < NCOLORS; col++) {
-        const long first = (long)bins->color_offset[col], last = (long)bins->color_offset[col + 1];
-#pragma omp parallel for schedule(dynamic, 1) num_threads(s->c->threads)
-        for (long t = first; t < last; t++) {
-            const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
-            int bc[3];
-            pblock_origin(pb, bc);
-            for (uint32_t idx = pb->start; idx < pb->end; idx++) {
-                const size_t p = bins->perm[idx];
-                weights W;
-                kernel_weights(S, s->x + p * D, s->c, bc, &W);
-                const sm_real *M = mats + p * DD;
-                STENCIL_BEGIN(S, W, pb)
-                (void)wgt;
-                for (int a = 0; a < D; a++) {
-                    sm_real acc = 0;
-                    for (int e = 0; e < D; e++) acc += M[a * D + e] * gw[e];
-                    out[ni * D + a] += acc;
+#pragma omp parallel num_threads(s->c->threads)
+    {
+        int th, T;
+        sm_thread_team(&th, &T);
+        for (int col = 0; col < NCOLORS; col++) {
+            long lo, hi;
+            sm_bins_range(bins, bins->color_blocks, (long)bins->color_offset[col], (long)bins->color_offset[col + 1], T,
+                          th, &lo, &hi);
+            for (long t = lo; t < hi; t++) {
+                const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
+                int bc[3];
+                pblock_origin(pb, bc);
+                for (uint32_t idx = pb->start; idx < pb->end; idx++) {
+                    const size_t p = bins->perm[idx];
+                    weights W;
+                    kernel_weights(S, s->x + p * D, s->c, bc, &W);
+                    const sm_real *M = mats + p * DD;
+                    STENCIL_BEGIN(S, W, pb)
+                    (void)wgt;
+                    for (int a = 0; a < D; a++) {
+                        sm_real acc = 0;
+                        for (int e = 0; e < D; e++) acc += M[a * D + e] * gw[e];
+                        out[ni * D + a] += acc;
+                    }
+                    STENCIL_END
                 }
-                STENCIL_END
             }
+#pragma omp barrier
         }
     }
 }
@@ -100,8 +109,13 @@ void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, const sm_real *z, int pre) {
     const sm_bins *bins = s->bins;
     const long nb = (long)bins->npb;
     const sm_real dt = (sm_real)s->c->dt;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(s->c->threads)
-    for (long b = 0; b < nb; b++)
+#pragma omp parallel num_threads(s->c->threads)
+    {
+        int th, nt;
+        long lo, hi;
+        sm_thread_team(&th, &nt);
+        sm_bins_range(bins, NULL, 0, nb, nt, th, &lo, &hi);
+        for (long b = lo; b < hi; b++)
         for (uint32_t i = bins->pb[b].start; i < bins->pb[b].end; i++) {
             size_t p = bins->perm[i];
             sm_real T[DD];
@@ -111,6 +125,7 @@ void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, const sm_real *z, int pre) {
             if (pre) sm_implicit_precompute(D, s->F + p * DD, dt, T, s->vol0[p], &im, &ws->pp[p], ws->G + p * DD);
             else sm_implicit_force_matrix(D, s->F + p * DD, dt, T, s->vol0[p], &im, ws->G + p * DD);
         }
+    }
     scatter(s, ws->G, ws->force);
 }
 
@@ -176,6 +191,32 @@ void SM_FN(sm_imp_force_increment)(const sm_implicit_sys *s, const sm_real *z, s
             vstar[l * D + a] = ws->mass[l] > 0 ? ws->vn[l * D + a] + dt * g[a] - dt / ws->mass[l] * ws->force[l * D + a] : 0;
 }
 
+double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z) {
+    const sm_implicit_ws *ws = s->ws;
+    const long nb = (long)s->grid->nactive;
+    double g2 = 0;
+    for (int a = 0; a < D; a++) g2 += (double)s->c->gravity[a] * (double)s->c->gravity[a];
+    const double dt = s->c->dt, dtg2 = dt * dt * g2;
+#pragma omp parallel for schedule(static) num_threads(s->c->threads)
+    for (long t = 0; t < nb; t++) {
+        double sum = 0;
+        for (size_t l = (size_t)t * BN; l < (size_t)(t + 1) * BN; l++) {
+            const double m = (double)ws->mass[l];
+            if (!(m > 0)) continue;
+            double q = dtg2;
+            for (int k = 0; k < D; k++) {
+                const double f = dt / m * (double)ws->force[l * D + k];
+                q += (double)z[l * D + k] * (double)z[l * D + k] + (double)ws->vn[l * D + k] * (double)ws->vn[l * D + k] + f * f;
+            }
+            sum += m * q;
+        }
+        ws->partial[t] = sum;
+    }
+    double sum = 0;
+    for (long t = 0; t < nb; t++) sum += ws->partial[t];
+    return sum;
+}
+
 double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, const sm_real *z, sm_real *y) {
     SM_FN(sm_imp_forces)(s, z, 0);
     SM_FN(sm_imp_residual)(s, z, y);
@@ -190,8 +231,13 @@ void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_rea
     const long nb = (long)bins->npb;
     memcpy(px, x, s->nodes * D * sizeof(sm_real));
     SM_FN(sm_imp_project)(s, px, 0);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(s->c->threads)
-    for (long b = 0; b < nb; b++)
+#pragma omp parallel num_threads(s->c->threads)
+    {
+        int th, nt;
+        long lo, hi;
+        sm_thread_team(&th, &nt);
+        sm_bins_range(bins, NULL, 0, nb, nt, th, &lo, &hi);
+        for (long b = lo; b < hi; b++)
         for (uint32_t i = bins->pb[b].start; i < bins->pb[b].end; i++) {
             size_t p = bins->perm[i];
             sm_real T1[DD];
@@ -199,6 +245,7 @@ void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_rea
             else gather_T(s, 4, p, &bins->pb[b], px, T1);
             sm_implicit_apply(D, &ws->pp[p], T1, ws->G + p * DD); /* the Hessian product, in G's place */
         }
+    }
     scatter(s, ws->G, out);
     const sm_real dt2 = (sm_real)(s->c->dt * s->c->dt);
     for (size_t l = 0; l < s->nodes; l++) {

@@ -10,10 +10,19 @@
 #ifndef SM_INTEGRATE_IMPLICIT_SOLVER_H
 #define SM_INTEGRATE_IMPLICIT_SOLVER_H
 
+#include <float.h>
+
 #include "collide/grid_collide.h"
 #include "grid/bin.h"
 #include "material/implicit.h"
 #include "material/material_rt.h"
+
+/* One rounding of sm_real. */
+#if SM_DOUBLE
+#define SM_REAL_EPSILON DBL_EPSILON
+#else
+#define SM_REAL_EPSILON FLT_EPSILON
+#endif
 
 /* Workspace of the implicit solve, grown as needed, never shrunk. Node vectors hold d values per
  * node of the live grid blocks, in grid node order (mass: one). Storage is reused between the
@@ -35,13 +44,16 @@
  *   contact  contacts of the last GRID_COLLISIONS (of z; at the finish, of v*)
  *   pp, G    per particle: Algorithm 8's precompute at z; G_p(z) (GMRES overwrites G with the
  *            Hessian products, so the line search recomputes G before reading it)
+ *   pinv     the preconditioner: per node the inverse of J's d x d diagonal block at the iterate
+ *            (implicit_precond_dim.c); pz: GMRES's M^-1 v, then M^-1 of the combined basis
  *   partial  per-live-block partial sums (deterministic dot products) */
 typedef struct sm_implicit_ws {
     size_t ncap;                 /* nodes the vectors hold */
     int kcap;                    /* Krylov vectors allocated */
     size_t pcap;                 /* particles pp and G hold */
     size_t partial_cap;          /* live blocks partial holds */
-    sm_real *mass, *vn, *force, *z, *y, *dz, *aux, *krylov;
+    sm_real *mass, *vn, *force, *z, *y, *dz, *aux, *krylov, *pz;
+    sm_real *pinv;               /* d x d per node */
     sm_node_contact *contact;
     sm_implicit_particle *pp;
     sm_real *G;
@@ -56,7 +68,10 @@ size_t sm_implicit_ws_bytes(const sm_implicit_ws *ws, int dim);
 /* Counters of the implicit solves (sm_diagnostics). */
 typedef struct sm_implicit_stats {
     uint64_t newton_total, gmres_total, unconverged;
+    uint64_t floor_stops;        /* solves that stopped at the precision's rounding floor above the tolerance */
+    uint64_t rejected;           /* solves whose dt was refused because Newton did not converge */
     int last_iterations;         /* Newton steps of the last solve */
+    int last_converged;          /* the last solve met the tolerance (or the rounding floor) */
     double last_norm;            /* its final residual norm sqrt(sum m |y|^2 / sum m), m/s */
     double last_residual;        /* the same over dt, m/s^2 */
     double hist[64];             /* residual (m/s^2) of each Newton step of the last solve */
@@ -87,6 +102,9 @@ typedef struct sm_implicit_io {
     double newton_tolerance;     /* def.newton_tolerance, m/s^2 */
     int newton_max_iterations, gmres_max_iterations;
     double gmres_tolerance;
+    int precondition;            /* def.gmres_preconditioner: 1 block Jacobi, 0 none */
+    int may_reject;              /* if Newton does not converge, return without finishing (stats->last_converged
+                                    = 0): the caller retries with a smaller dt */
     sm_implicit_stats *stats;
 } sm_implicit_io;
 
@@ -117,6 +135,14 @@ double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, const sm_real *z, 
 void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_real *out, sm_real *px);
 /* GRID_COLLISIONS of z in place, recording ws->contact. */
 void SM_FN(sm_imp_collide)(const sm_implicit_sys *s, sm_real *z);
+/* sum m (|z|^2 + |v^n|^2 + |dt g|^2 + |dt f / m|^2) over nodes with mass (ws->force as the last
+ * sm_imp_forces left it): the scale of the residual's terms, for its rounding floor. */
+double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z);
+
+/* The block-Jacobi preconditioner (implicit_precond_dim.c): ws->pinv from the precompute at
+ * the iterate (after sm_imp_forces with pre), and out = M^-1 x. */
+void SM_FN(sm_imp_precond_build)(const sm_implicit_sys *s);
+void SM_FN(sm_imp_precond_apply)(const sm_implicit_sys *s, const sm_real *x, sm_real *out);
 #endif
 
 #endif

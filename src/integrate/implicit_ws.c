@@ -14,9 +14,9 @@ sm_status sm_implicit_ws_reserve(sm_implicit_ws *ws, int dim, size_t nodes, size
     if (ws->ncap < nodes || ws->kcap < K + 1) {
         size_t cap = nodes + nodes / 4 + 64;
         int kc = K + 1;
-        sm_real **vecs[7] = {&ws->mass, &ws->vn, &ws->z, &ws->y, &ws->dz, &ws->aux, &ws->force};
-        for (int k = 0; k < 7; k++) {
-            sm_real *q = sm_realloc(*vecs[k], cap * (k == 0 ? 1 : d) * sizeof(sm_real));
+        sm_real **vecs[9] = {&ws->mass, &ws->vn, &ws->z, &ws->y, &ws->dz, &ws->aux, &ws->force, &ws->pz, &ws->pinv};
+        for (int k = 0; k < 9; k++) {
+            sm_real *q = sm_realloc(*vecs[k], cap * (k == 0 ? 1 : k == 8 ? d * d : d) * sizeof(sm_real));
             if (!q) return SM_ERR_NOMEM;
             *vecs[k] = q;
         }
@@ -41,7 +41,7 @@ sm_status sm_implicit_ws_reserve(sm_implicit_ws *ws, int dim, size_t nodes, size
 }
 
 void sm_implicit_ws_free(sm_implicit_ws *ws) {
-    void *arrays[] = {ws->partial, ws->mass, ws->vn, ws->z, ws->y, ws->dz, ws->aux, ws->force, ws->krylov,
+    void *arrays[] = {ws->partial, ws->mass, ws->vn, ws->z, ws->y, ws->dz, ws->aux, ws->force, ws->pz, ws->pinv, ws->krylov,
                       ws->contact, ws->pp, ws->G};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++) free(arrays[i]);
     memset(ws, 0, sizeof *ws);
@@ -49,7 +49,7 @@ void sm_implicit_ws_free(sm_implicit_ws *ws) {
 
 size_t sm_implicit_ws_bytes(const sm_implicit_ws *ws, int dim) {
     const size_t d = (size_t)dim;
-    return ws->ncap * sizeof(sm_real) * (1 + 6 * d) + (size_t)ws->kcap * ws->ncap * d * sizeof(sm_real) +
+    return ws->ncap * sizeof(sm_real) * (1 + 7 * d + d * d) + (size_t)ws->kcap * ws->ncap * d * sizeof(sm_real) +
            ws->ncap * sizeof(sm_node_contact) + ws->pcap * (sizeof(sm_implicit_particle) + d * d * sizeof(sm_real)) +
            ws->partial_cap * sizeof(double);
 }

@@ -1,7 +1,9 @@
 /* The step driver: one MPM step as thesis Algorithm 1 (DESIGN §3), and the choice of dt.
  *
- *   dt      min(max_dt, cfl dx / max particle speed, elastic_cfl dx / wave speed), landing
- *           exactly on the target time (sm_world_next_dt, sm_world_advance);
+ *   dt      min(max_dt, cfl dx / max particle speed, elastic_cfl dx / wave speed (explicit), the
+ *           Newton rule (implicit: implicit_dt_limit)), landing exactly on the target time
+ *           (sm_world_next_dt, sm_world_advance); a step refused by the CFL check or by an
+ *           unconverged Newton solve is retried at half the dt;
  *   2       bin particles by grid block (grid/bin_dim.c);
  *   3       P2G: mass, momentum, internal force (transfer/p2g_dim.c);
  *   4-5     grid update v* = v^n + dt (f/m + g) (integrate/explicit_dim.c) or the implicit solve
@@ -88,6 +90,7 @@ static sm_implicit_io implicit_io(sm_world *w) {
     io.newton_max_iterations = w->def.newton_max_iterations;
     io.gmres_max_iterations = w->def.gmres_max_iterations;
     io.gmres_tolerance = w->def.gmres_tolerance;
+    io.precondition = w->def.gmres_preconditioner;
     io.stats = &w->newton;
     return io;
 }
@@ -124,13 +127,18 @@ static void p2g(sm_world *w, const sm_step_ctx *c) {
 }
 
 /* 4-5. Grid velocities v-bar, v-tilde (and v^n for FLIP): explicit update or implicit solve. */
+/* An implicit step above this fraction of max_dt whose Newton solve does not converge is refused
+ * (retried at half the dt); at or below it, it is taken and counted as unconverged. */
+#define SM_IMPLICIT_REJECT_FRACTION (1.0 / 1024)
+
 static sm_status grid_velocities(sm_world *w, const sm_step_ctx *c) {
     if (w->def.integrator != SM_INTEGRATOR_IMPLICIT) {
         const sm_grid_update_io io = grid_update_io(w);
         w->stages->grid_update(&io, c);
         return SM_OK;
     }
-    const sm_implicit_io io = implicit_io(w);
+    sm_implicit_io io = implicit_io(w);
+    io.may_reject = c->dt > SM_IMPLICIT_REJECT_FRACTION * w->def.max_dt;
     const sm_status st = w->stages->implicit_solve(&io, c);
     if (st == SM_ERR_NOMEM)
         return sm_world_fail(w, SM_ERR_NOMEM, "implicit integrator: out of memory for %zu grid nodes",
@@ -138,6 +146,15 @@ static sm_status grid_velocities(sm_world *w, const sm_step_ctx *c) {
     if (st != SM_OK)
         return sm_world_fail(w, st, "step %llu (t = %.6g s, dt = %.3g s): the implicit solve diverged (residual %g)",
                              (unsigned long long)w->steps + 1, w->time, c->dt, w->newton.last_norm);
+    if (!w->newton.last_converged && io.may_reject) { /* only the grid has changed: retry at half the dt */
+        w->cfl_rejected = 1;
+        w->dt_cap = 0.5 * c->dt;
+        return sm_world_fail(w, SM_ERR_NUMERICAL,
+                             "step %llu (t = %.6g s): Newton did not converge in %d iterations at dt = %.3g s (residual "
+                             "%.3g m/s^2); the world is intact: retry with a smaller dt",
+                             (unsigned long long)w->steps + 1, w->time, w->def.newton_max_iterations, c->dt,
+                             w->newton.last_residual);
+    }
     return SM_OK;
 }
 
@@ -199,7 +216,12 @@ static sm_status step_particles(sm_world *w, const sm_step_ctx *c) {
     STAGE(w, &t, SM_STAGE_SORT, bin_particles(w, c));     /* 2 */
     p2g(w, c);                                            /* 3 */
     lap(w, SM_STAGE_P2G, &t);
-    STAGE(w, &t, SM_STAGE_GRID, grid_velocities(w, c));  /* 4-5 */
+    const sm_status grid_st = grid_velocities(w, c);      /* 4-5 */
+    lap(w, SM_STAGE_GRID, &t);
+    if (grid_st != SM_OK) {
+        if (!w->cfl_rejected) w->failed = 1; /* a refused implicit dt leaves the world usable */
+        return grid_st;
+    }
     STAGE(w, &t, SM_STAGE_CHECKS, sm_health_check_grid(w, c->dt));
     g2p(w, c);                                            /* 6 */
     lap(w, SM_STAGE_G2P, &t);
@@ -273,6 +295,20 @@ static double max_particle_speed(const sm_world *w) {
     return sqrt(m2);
 }
 
+/* The implicit step-size rule: from the last step's dt and its Newton iterations (both in the
+ * checkpoint, so a resumed run chooses the same dt). A step whose Newton solve does not converge
+ * is refused and retried at half its dt (grid_velocities); after a fast solve the dt may double,
+ * after a slower one grow by a quarter, after a slow one it stays. */
+#define IMPLICIT_FAST_NEWTON 3
+#define IMPLICIT_SLOW_NEWTON 8
+static double implicit_dt_limit(const sm_world *w) {
+    const int it = w->newton.last_iterations;
+    if (w->steps == 0 || it == 0 || !(w->last_dt > 0)) return INFINITY;
+    if (it <= IMPLICIT_FAST_NEWTON) return 2.0 * w->last_dt;
+    if (it <= IMPLICIT_SLOW_NEWTON) return 1.25 * w->last_dt;
+    return w->last_dt;
+}
+
 double sm_world_next_dt(sm_world *w, double t_end) {
     double t0 = sm_seconds();
     double dt = w->def.max_dt;
@@ -283,7 +319,8 @@ double sm_world_next_dt(sm_world *w, double t_end) {
         for (int i = 0; i < w->nmats; i++) c = fmax(c, w->mats[i].wave_speed);
         if (c > 0) dt = fmin(dt, w->def.elastic_cfl * w->def.dx / c);
     }
-    dt = fmin(dt, w->dt_cap); /* after a step refused by the CFL check */
+    if (w->def.integrator == SM_INTEGRATOR_IMPLICIT) dt = fmin(dt, implicit_dt_limit(w));
+    dt = fmin(dt, w->dt_cap); /* after a step refused by the CFL check or by Newton */
     double remaining = t_end - w->time;
     if (remaining > 0) {
         if (dt >= remaining * (1 - 1e-12)) dt = remaining;

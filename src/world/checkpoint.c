@@ -22,7 +22,7 @@
 #include "world/world.h"
 
 #define CKPT_MAGIC "SANDMPMC"
-#define CKPT_VERSION 2u /* 2: positions are double in both builds (particles.h) */
+#define CKPT_VERSION 3u /* 2: positions are double in both builds (particles.h); 3: gmres_preconditioner, implicit stats */
 #define CKPT_ENDIAN 0x01020304u
 #define CKPT_MAX_NAME 32
 

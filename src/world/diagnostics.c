@@ -107,6 +107,8 @@ void sm_world_diagnostics(const sm_world *w, sm_diagnostics *o) {
     o->last_newton_iterations = w->newton.last_iterations;
     o->last_newton_residual = w->newton.last_residual;
     o->newton_unconverged = w->newton.unconverged;
+    o->newton_rejected = w->newton.rejected;
+    o->newton_floor_stops = w->newton.floor_stops;
 }
 
 void sm_world_reset_step_stats(sm_world *w) {

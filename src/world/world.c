@@ -73,6 +73,7 @@ sm_world_def sm_world_def_default(void) {
     d.newton_max_iterations = 20;
     d.gmres_max_iterations = 15;
     d.gmres_tolerance = 1e-2;
+    d.gmres_preconditioner = 0; /* block Jacobi did not pay in general: docs/benchmarks.md */
     d.static_friction_sticks = 1;
     d.particle_projection = 1;
     d.threads = 0;
@@ -104,6 +105,7 @@ sm_status sm_world_def_check(const sm_world_def *def, char *err, size_t errlen) 
     else if (def->newton_max_iterations < 1 || def->newton_max_iterations > 1000) snprintf(msg, sizeof msg, "newton_max_iterations: must be in 1..1000, got %d", def->newton_max_iterations);
     else if (def->gmres_max_iterations < 1 || def->gmres_max_iterations > 200) snprintf(msg, sizeof msg, "gmres_max_iterations: must be in 1..200, got %d", def->gmres_max_iterations);
     else if (!(def->gmres_tolerance > 0 && def->gmres_tolerance < 1)) snprintf(msg, sizeof msg, "gmres_tolerance: must be in (0, 1), got %g", def->gmres_tolerance);
+    else if (def->gmres_preconditioner != 0 && def->gmres_preconditioner != 1) snprintf(msg, sizeof msg, "gmres_preconditioner: must be 0 (none) or 1 (block Jacobi), got %d", def->gmres_preconditioner);
     else if (!(def->cfl > 0 && def->cfl <= 1)) snprintf(msg, sizeof msg, "cfl: must be in (0, 1], got %g", def->cfl);
     else if (!(def->max_dt > 0) || !isfinite(def->max_dt)) snprintf(msg, sizeof msg, "max_dt: must be > 0, got %g", def->max_dt);
     else if (!(def->elastic_cfl >= 0) || !isfinite(def->elastic_cfl)) snprintf(msg, sizeof msg, "elastic_cfl: must be >= 0, got %g", def->elastic_cfl);

@@ -2,17 +2,24 @@
  * block with colliders is identical for 1, 2 and 3 threads (3 splits the blocks unevenly), and for
  * two runs with the same input;
  * the state does change over the 50 steps (so the hash is not trivially constant). 2D and 3D,
- * both kernels, APIC and FLIP. */
+ * both kernels, APIC and FLIP; and the implicit integrator (Newton-GMRES, its step-size rule,
+ * with and without the block-Jacobi preconditioner), quadratic APIC. */
 #include "test_util.h"
 #include "sandmpm/sandmpm.h"
 
-static uint64_t run(int dim, int threads, sm_kernel kernel, sm_transfer tr, uint64_t *h0) {
+/* implicit: 0 explicit, 1 implicit, 2 implicit with the block-Jacobi preconditioner. */
+static uint64_t run(int dim, int threads, sm_kernel kernel, sm_transfer tr, int implicit, uint64_t *h0) {
     sm_world_def def = sm_world_def_default();
     def.dim = dim;
     def.dx = dim == 2 ? 0.01 : 0.04;
     def.kernel = kernel;
     def.transfer = tr;
     def.threads = threads;
+    if (implicit) {
+        def.integrator = SM_INTEGRATOR_IMPLICIT;
+        def.max_dt = 5e-3; /* above the explicit limit: Newton works, the step-size rule acts */
+        def.gmres_preconditioner = implicit == 2;
+    }
     sm_world *w = NULL;
     char err[256];
     if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) return 0;
@@ -72,14 +79,28 @@ static uint64_t run(int dim, int threads, sm_kernel kernel, sm_transfer tr, uint
 
 int main(void) {
     for (int dim = 2; dim <= 3; dim++)
+        for (int implicit = 1; implicit <= 2; implicit++) {
+            uint64_t s1, s2, s3;
+            uint64_t h1 = run(dim, 1, SM_KERNEL_QUADRATIC, SM_TRANSFER_APIC, implicit, &s1);
+            uint64_t h2 = run(dim, 2, SM_KERNEL_QUADRATIC, SM_TRANSFER_APIC, implicit, &s2);
+            uint64_t h3 = run(dim, 3, SM_KERNEL_QUADRATIC, SM_TRANSFER_APIC, implicit, &s3);
+            printf("%dD implicit%s: 1 thread %016llx, 2 threads %016llx, 3 threads %016llx\n", dim,
+                   implicit == 2 ? " (block Jacobi)" : "", (unsigned long long)h1, (unsigned long long)h2,
+                   (unsigned long long)h3);
+            CHECK(h1 != 0);
+            CHECK(h1 == h2);
+            CHECK(h1 == h3);
+            CHECK(h1 != s1);
+        }
+    for (int dim = 2; dim <= 3; dim++)
         for (int k = 0; k < 2; k++)
             for (int t = 0; t < 2; t++) {
                 sm_transfer tr = t ? SM_TRANSFER_FLIP : SM_TRANSFER_APIC;
                 uint64_t s1, s2, s3, s4;
-                uint64_t h1 = run(dim, 1, (sm_kernel)k, tr, &s1);
-                uint64_t h2 = run(dim, 2, (sm_kernel)k, tr, &s2);
-                uint64_t h3 = run(dim, 2, (sm_kernel)k, tr, &s3);
-                uint64_t h4 = run(dim, 3, (sm_kernel)k, tr, &s4);
+                uint64_t h1 = run(dim, 1, (sm_kernel)k, tr, 0, &s1);
+                uint64_t h2 = run(dim, 2, (sm_kernel)k, tr, 0, &s2);
+                uint64_t h3 = run(dim, 2, (sm_kernel)k, tr, 0, &s3);
+                uint64_t h4 = run(dim, 3, (sm_kernel)k, tr, 0, &s4);
                 printf("%dD %s %s: 1 thread %016llx, 2 threads %016llx, again %016llx, 3 threads %016llx\n", dim,
                        k ? "cubic" : "quadratic", t ? "FLIP" : "APIC", (unsigned long long)h1, (unsigned long long)h2,
                        (unsigned long long)h3, (unsigned long long)h4);

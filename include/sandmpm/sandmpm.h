@@ -579,7 +579,9 @@ typedef enum sm_stage {
 SM_API const char *sm_stage_name(sm_stage s);
 
 /** The next time step the world would take, capped so it does not pass t_end (s). After a step
- *  that sm_world_step refused by the CFL check, at most half the refused dt (until a step is taken). */
+ *  that sm_world_step refused (the CFL check, an implicit solve that did not converge), at most
+ *  half the refused dt (until a step is taken). Implicit: also at most twice the last dt after a
+ *  Newton solve of at most 3 iterations, 1.25 times it after at most 8, the last dt after more. */
 SM_API double sm_world_next_dt(sm_world *w, double t_end);
 
 /** One step of size dt (> 0, s). Returns SM_ERR_NUMERICAL with a message naming the step and
@@ -588,11 +590,15 @@ SM_API double sm_world_next_dt(sm_world *w, double t_end);
  *  CFL bound, with a relative slack of 1e-5 on the squared speed so that sm_world_next_dt's own
  *  choice at cfl = 1 passes) is refused before anything moves: SM_ERR_NUMERICAL with a message
  *  naming the particle, the world unchanged and still usable; retry with a smaller dt (or with
- *  sm_world_next_dt, which then returns at most half the refused dt). */
+ *  sm_world_next_dt, which then returns at most half the refused dt). The implicit integrator
+ *  refuses a dt above max_dt / 1024 in the same way (same status, world unchanged) when Newton
+ *  does not converge in newton_max_iterations; at or below it the step is taken and counted in
+ *  sm_diagnostics.newton_unconverged. sm_world_advance retries both refusals itself. */
 SM_API sm_status sm_world_step(sm_world *w, double dt);
 
-/** Adaptive steps until the world's time equals t_end exactly. A step refused by the CFL check
- *  (see sm_world_step) is retried with half the dt, up to 60 times in a row. */
+/** Adaptive steps until the world's time equals t_end exactly. A step refused by the CFL check or
+ *  by an unconverged implicit solve (see sm_world_step) is retried with half the dt, up to 60
+ *  times in a row. */
 SM_API sm_status sm_world_advance(sm_world *w, double t_end);
 
 /** Simulated time, s. */

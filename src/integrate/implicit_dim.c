@@ -76,7 +76,10 @@ static int gmres(const sm_implicit_sys *s, const sm_real *b, sm_real *x, int K, 
     if (rtol < GMRES_RTOL_FLOOR) rtol = GMRES_RTOL_FLOOR;
     double H[201][200], cs[200], sn[200], gvec[201];
     double beta = sqrt(SM_FN(sm_imp_dot)(s, b, b));
-    if (!(beta > 0)) return 0;
+    if (!(beta > 0)) {
+        memset(x, 0, N * sizeof(sm_real));
+        return 0;
+    }
     for (size_t k = 0; k < N; k++) V[k] = (sm_real)((double)b[k] / beta);
     memset(gvec, 0, sizeof gvec);
     gvec[0] = beta;

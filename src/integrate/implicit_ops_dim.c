@@ -55,41 +55,67 @@ static inline __attribute__((always_inline)) void gather_T(const sm_implicit_sys
     STENCIL_END
 }
 
-/* out_i = sum_p M_p grad w_ip, with M_p from `mats` (n x DD), scattered in the colour schedule
- * with P2G's static particle split (sm_bins_range). */
-static void scatter(const sm_implicit_sys *s, const sm_real *mats, sm_real *out) {
-    const int S = s->c->stencil;
+void SM_FN(sm_imp_scatter_by_colour)(const sm_implicit_sys *s, sm_imp_particle_scatter fn, const void *arg,
+                                     sm_real *out) {
     const sm_bins *bins = s->bins;
-    memset(out, 0, s->nodes * D * sizeof(sm_real));
 #pragma omp parallel num_threads(s->c->threads)
     {
-        int th, T;
-        sm_thread_team(&th, &T);
+        int th, nt;
+        sm_thread_team(&th, &nt);
         for (int col = 0; col < NCOLORS; col++) {
             long lo, hi;
-            sm_bins_range(bins, bins->color_blocks, (long)bins->color_offset[col], (long)bins->color_offset[col + 1], T,
+            sm_bins_range(bins, bins->color_blocks, (long)bins->color_offset[col], (long)bins->color_offset[col + 1], nt,
                           th, &lo, &hi);
             for (long t = lo; t < hi; t++) {
                 const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
                 int bc[3];
                 pblock_origin(pb, bc);
-                for (uint32_t idx = pb->start; idx < pb->end; idx++) {
-                    const size_t p = bins->perm[idx];
-                    weights W;
-                    kernel_weights(S, s->x + p * D, s->c, bc, &W);
-                    const sm_real *M = mats + p * DD;
-                    STENCIL_BEGIN(S, W, pb)
-                    (void)wgt;
-                    for (int a = 0; a < D; a++) {
-                        sm_real acc = 0;
-                        for (int e = 0; e < D; e++) acc += M[a * D + e] * gw[e];
-                        out[ni * D + a] += acc;
-                    }
-                    STENCIL_END
-                }
+                for (uint32_t idx = pb->start; idx < pb->end; idx++) fn(s, arg, bins->perm[idx], pb, bc, out);
             }
 #pragma omp barrier
         }
+    }
+}
+
+/* Particle p's M_p grad w_ip into out_i (arg: the matrices M, n x DD). */
+static void scatter_matrix(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb, const int bc[3],
+                           sm_real *out) {
+    const int S = s->c->stencil;
+    const sm_real *M = (const sm_real *)arg + p * DD;
+    weights W;
+    kernel_weights(S, s->x + p * D, s->c, bc, &W);
+    STENCIL_BEGIN(S, W, pb)
+    (void)wgt;
+    for (int a = 0; a < D; a++) {
+        sm_real acc = 0;
+        for (int e = 0; e < D; e++) acc += M[a * D + e] * gw[e];
+        out[ni * D + a] += acc;
+    }
+    STENCIL_END
+}
+
+/* out_i = sum_p M_p grad w_ip, with M_p from `mats` (n x DD). */
+static void scatter(const sm_implicit_sys *s, const sm_real *mats, sm_real *out) {
+    memset(out, 0, s->nodes * D * sizeof(sm_real));
+    SM_FN(sm_imp_scatter_by_colour)(s, scatter_matrix, mats, out);
+}
+
+/* Per-particle work of a gather pass: particle p of block pb. */
+typedef void (*particle_fn)(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb);
+
+/* fn for every particle, with P2G's static particle split (sm_bins_range): a thread works on
+ * the same particles as in the other stages. */
+static void for_particles(const sm_implicit_sys *s, particle_fn fn, const void *arg) {
+    const sm_bins *bins = s->bins;
+    const long nb = (long)bins->npb;
+#pragma omp parallel num_threads(s->c->threads)
+    {
+        int th, nt;
+        long lo, hi;
+        sm_thread_team(&th, &nt);
+        sm_bins_range(bins, NULL, 0, nb, nt, th, &lo, &hi);
+        for (long b = lo; b < hi; b++)
+            for (uint32_t i = bins->pb[b].start; i < bins->pb[b].end; i++) fn(s, arg, bins->perm[i], &bins->pb[b]);
     }
 }
 
@@ -103,30 +129,28 @@ static inline sm_implicit_material particle_material(const sm_implicit_sys *s, s
     return im;
 }
 
-void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, const sm_real *z, int pre) {
+typedef struct {
+    const sm_real *z;
+    int pre;
+} forces_arg;
+
+/* G_p at z (and the precompute if pre) of particle p. */
+static void particle_force(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb) {
+    const forces_arg *fa = arg;
     sm_implicit_ws *ws = s->ws;
-    const int S = s->c->stencil;
-    const sm_bins *bins = s->bins;
-    const long nb = (long)bins->npb;
     const sm_real dt = (sm_real)s->c->dt;
-#pragma omp parallel num_threads(s->c->threads)
-    {
-        int th, nt;
-        long lo, hi;
-        sm_thread_team(&th, &nt);
-        sm_bins_range(bins, NULL, 0, nb, nt, th, &lo, &hi);
-        for (long b = lo; b < hi; b++)
-        for (uint32_t i = bins->pb[b].start; i < bins->pb[b].end; i++) {
-            size_t p = bins->perm[i];
-            sm_real T[DD];
-            if (S == 3) gather_T(s, 3, p, &bins->pb[b], z, T);
-            else gather_T(s, 4, p, &bins->pb[b], z, T);
-            sm_implicit_material im = particle_material(s, p);
-            if (pre) sm_implicit_precompute(D, s->F + p * DD, dt, T, s->vol0[p], &im, &ws->pp[p], ws->G + p * DD);
-            else sm_implicit_force_matrix(D, s->F + p * DD, dt, T, s->vol0[p], &im, ws->G + p * DD);
-        }
-    }
-    scatter(s, ws->G, ws->force);
+    sm_real T[DD];
+    if (s->c->stencil == 3) gather_T(s, 3, p, pb, fa->z, T);
+    else gather_T(s, 4, p, pb, fa->z, T);
+    sm_implicit_material im = particle_material(s, p);
+    if (fa->pre) sm_implicit_precompute(D, s->F + p * DD, dt, T, s->vol0[p], &im, &ws->pp[p], ws->G + p * DD);
+    else sm_implicit_force_matrix(D, s->F + p * DD, dt, T, s->vol0[p], &im, ws->G + p * DD);
+}
+
+void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, const sm_real *z, int pre) {
+    const forces_arg fa = {z, pre};
+    for_particles(s, particle_force, &fa);
+    scatter(s, s->ws->G, s->ws->force);
 }
 
 void SM_FN(sm_imp_collide)(const sm_implicit_sys *s, sm_real *z) {
@@ -224,28 +248,20 @@ double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, const sm_real *z, 
     return SM_FN(sm_imp_dot)(s, y, y);
 }
 
+/* The Hessian product of particle p at the projected direction px (arg), in G's place. */
+static void particle_hessian(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb) {
+    sm_implicit_ws *ws = s->ws;
+    sm_real T1[DD];
+    if (s->c->stencil == 3) gather_T(s, 3, p, pb, arg, T1);
+    else gather_T(s, 4, p, pb, arg, T1);
+    sm_implicit_apply(D, &ws->pp[p], T1, ws->G + p * DD);
+}
+
 void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_real *out, sm_real *px) {
     sm_implicit_ws *ws = s->ws;
-    const int S = s->c->stencil;
-    const sm_bins *bins = s->bins;
-    const long nb = (long)bins->npb;
     memcpy(px, x, s->nodes * D * sizeof(sm_real));
     SM_FN(sm_imp_project)(s, px, 0);
-#pragma omp parallel num_threads(s->c->threads)
-    {
-        int th, nt;
-        long lo, hi;
-        sm_thread_team(&th, &nt);
-        sm_bins_range(bins, NULL, 0, nb, nt, th, &lo, &hi);
-        for (long b = lo; b < hi; b++)
-        for (uint32_t i = bins->pb[b].start; i < bins->pb[b].end; i++) {
-            size_t p = bins->perm[i];
-            sm_real T1[DD];
-            if (S == 3) gather_T(s, 3, p, &bins->pb[b], px, T1);
-            else gather_T(s, 4, p, &bins->pb[b], px, T1);
-            sm_implicit_apply(D, &ws->pp[p], T1, ws->G + p * DD); /* the Hessian product, in G's place */
-        }
-    }
+    for_particles(s, particle_hessian, px);
     scatter(s, ws->G, out);
     const sm_real dt2 = (sm_real)(s->c->dt * s->c->dt);
     for (size_t l = 0; l < s->nodes; l++) {

@@ -18,7 +18,6 @@
 
 #include <string.h>
 
-#include "core/threads.h"
 #include "integrate/implicit_solver.h"
 #include "transfer/stencil_dim.h"
 
@@ -47,40 +46,19 @@ static inline void add_block(const sm_real *C, const sm_real *gw, sm_real *blk) 
     }
 }
 
-/* The sums over particles into ws->pinv (DD per node), colour by colour, with P2G's static
- * particle split (sm_bins_range). */
-static void scatter_blocks(const sm_implicit_sys *s) {
+/* Particle p's terms of the diagonal blocks into blocks (DD per node). */
+static void scatter_particle_blocks(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb,
+                                    const int bc[3], sm_real *blocks) {
+    (void)arg;
     const int S = s->c->stencil;
-    const sm_bins *bins = s->bins;
-    sm_real *blocks = s->ws->pinv;
-    memset(blocks, 0, s->nodes * DD * sizeof(sm_real));
-#pragma omp parallel num_threads(s->c->threads)
-    {
-        int th, nt;
-        sm_thread_team(&th, &nt);
-        for (int col = 0; col < NCOLORS; col++) {
-            long lo, hi;
-            sm_bins_range(bins, bins->color_blocks, (long)bins->color_offset[col], (long)bins->color_offset[col + 1], nt,
-                          th, &lo, &hi);
-            for (long t = lo; t < hi; t++) {
-                const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
-                int bc[3];
-                pblock_origin(pb, bc);
-                for (uint32_t idx = pb->start; idx < pb->end; idx++) {
-                    const size_t p = bins->perm[idx];
-                    sm_real C[DD * DD];
-                    particle_operator(&s->ws->pp[p], C);
-                    weights W;
-                    kernel_weights(S, s->x + p * D, s->c, bc, &W);
-                    STENCIL_BEGIN(S, W, pb)
-                    (void)wgt;
-                    add_block(C, gw, blocks + ni * DD);
-                    STENCIL_END
-                }
-            }
-#pragma omp barrier
-        }
-    }
+    sm_real C[DD * DD];
+    particle_operator(&s->ws->pp[p], C);
+    weights W;
+    kernel_weights(S, s->x + p * D, s->c, bc, &W);
+    STENCIL_BEGIN(S, W, pb)
+    (void)wgt;
+    add_block(C, gw, blocks + ni * DD);
+    STENCIL_END
 }
 
 /* Inverse of the d x d block A (double), or 0 if it is singular or not finite. */
@@ -139,7 +117,8 @@ static int well_posed(const double *S) {
  * Newton's step with it diverged (an elastic block at 10x the explicit dt limit). */
 void SM_FN(sm_imp_precond_build)(const sm_implicit_sys *s) {
     sm_implicit_ws *ws = s->ws;
-    scatter_blocks(s);
+    memset(ws->pinv, 0, s->nodes * DD * sizeof(sm_real));
+    SM_FN(sm_imp_scatter_by_colour)(s, scatter_particle_blocks, NULL, ws->pinv);
     const double dt2 = s->c->dt * s->c->dt;
     const long nl = (long)s->nodes;
 #pragma omp parallel for schedule(static) num_threads(s->c->threads)

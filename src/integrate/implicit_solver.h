@@ -139,6 +139,14 @@ void SM_FN(sm_imp_collide)(const sm_implicit_sys *s, sm_real *z);
  * sm_imp_forces left it): the scale of the residual's terms, for its rounding floor. */
 double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z);
 
+/* Per-particle work of a scatter: particle p's terms (block pb, origin bc) added into out. */
+typedef void (*sm_imp_particle_scatter)(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb,
+                                        const int bc[3], sm_real *out);
+/* fn for every particle, colour by colour (no two threads reach a node at once; the same sum
+ * order for any thread count), with P2G's static particle split (sm_bins_range). */
+void SM_FN(sm_imp_scatter_by_colour)(const sm_implicit_sys *s, sm_imp_particle_scatter fn, const void *arg,
+                                     sm_real *out);
+
 /* The block-Jacobi preconditioner (implicit_precond_dim.c): ws->pinv from the precompute at
  * the iterate (after sm_imp_forces with pre), and out = M^-1 x. */
 void SM_FN(sm_imp_precond_build)(const sm_implicit_sys *s);

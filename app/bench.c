@@ -83,7 +83,7 @@ static sm_status steps(sm_world *w, int n, const char *what, char *err, size_t e
 
 sm_status sm_bench_run(const sm_bench_case *c, sm_bench_result *r, char *err, size_t errlen) {
     memset(r, 0, sizeof *r);
-    if ((c->dim != 2 && c->dim != 3) || c->threads < 1 || !(c->particles >= 1) || c->warmup < 0 || c->steps < 1) {
+    if ((c->dim != 2 && c->dim != 3) || c->threads < 0 || !(c->particles >= 1) || c->warmup < 0 || c->steps < 1) {
         snprintf(err, errlen, "bad benchmark case (dim %d, threads %d, particles %g, warmup %d, steps %d)", c->dim,
                  c->threads, c->particles, c->warmup, c->steps);
         return SM_ERR_INVALID;
@@ -152,8 +152,11 @@ void sm_bench_table_header(FILE *f, const sm_bench_case *c) {
 }
 
 void sm_bench_table_row(FILE *f, const sm_bench_result *r) {
-    fprintf(f, "%2dD  %-9s  %7d  %9zu  %9.3g", r->dim, sm_bench_precision_name(r->is_double), r->threads,
-            r->particles, sm_bench_rate(r));
+    char threads[16];
+    if (r->threads) snprintf(threads, sizeof threads, "%d", r->threads);
+    else snprintf(threads, sizeof threads, "auto");
+    fprintf(f, "%2dD  %-9s  %7s  %9zu  %9.3g", r->dim, sm_bench_precision_name(r->is_double), threads, r->particles,
+            sm_bench_rate(r));
     for (int s = 0; s < SM_STAGE_COUNT; s++) {
         double v = sm_bench_stage_rate(r, s);
         if (v > 0) fprintf(f, "%*.3g", stage_width(s), v);
@@ -208,7 +211,7 @@ sm_status sm_bench_parse_raw(const char *line, sm_bench_result *r, char *err, si
             return SM_ERR_INVALID;
         }
     while (*p == ' ' || *p == '\n' || *p == '\r') p++;
-    if (*p || (v[0] != 2 && v[0] != 3) || v[1] < 1 || (v[2] != 0 && v[2] != 1) || v[3] < 1 || v[4] < 1) {
+    if (*p || (v[0] != 2 && v[0] != 3) || v[1] < 0 || (v[2] != 0 && v[2] != 1) || v[3] < 1 || v[4] < 1) {
         snprintf(err, errlen, "malformed benchmark result: \"%.*s\"", shown, line);
         return SM_ERR_INVALID;
     }

@@ -14,7 +14,7 @@
 
 typedef struct sm_bench_case {
     int dim;          /* 2 or 3 */
-    int threads;      /* >= 1 */
+    int threads;      /* >= 1, or 0: the library's choice per step (the default of a run; governor.h) */
     double particles; /* target particle count (the block is sized to it; the seeded count is close) */
     int warmup;       /* unmeasured steps first (>= 0) */
     int steps;        /* measured steps (>= 1) */

@@ -74,14 +74,15 @@ static int parse_list_option(const char *a, const char *v, bench_opts *o) {
     if (!strcmp(a, "--threads")) {
         int n = split_list(v, items, BENCH_MAX_THREADS);
         for (int k = 0; k < n; k++) {
-            if (!cli_parse_int(items[k], 1, 1024, &o->threads[k])) n = -1;
+            if (!strcmp(items[k], "auto")) o->threads[k] = 0; /* the library's choice (governor.h) */
+            else if (!cli_parse_int(items[k], 1, 1024, &o->threads[k])) n = -1;
             for (int j = 0; j < k && n > 0; j++)
                 if (o->threads[j] == o->threads[k]) n = -1;
         }
         if (n < 1) {
             fprintf(stderr,
-                    "sandmpm bench: --threads: expected a comma list of different thread counts 1..1024 (at most "
-                    "%d), got \"%s\"\n",
+                    "sandmpm bench: --threads: expected a comma list of different thread counts 1..1024 or auto "
+                    "(at most %d), got \"%s\"\n",
                     BENCH_MAX_THREADS, v);
             return -1;
         }
@@ -181,10 +182,13 @@ static sm_status bench_local(const bench_opts *o) {
             c.dim = dim;
             c.threads = o->threads[t];
             const char *prec = sm_bench_precision_name(sm_real_is_double());
+            char who[32];
+            if (c.threads == 0) snprintf(who, sizeof who, "threads auto");
+            else snprintf(who, sizeof who, "%d thread%s", c.threads, c.threads == 1 ? "" : "s");
             int len = 0;
             if (o->progress)
-                len = fprintf(stderr, "running %dD %s, %d thread%s, about %.0f particles, %d + %d steps ...", dim, prec,
-                              c.threads, c.threads == 1 ? "" : "s", c.particles, c.warmup, c.steps);
+                len = fprintf(stderr, "running %dD %s, %s, about %.0f particles, %d + %d steps ...", dim, prec, who,
+                              c.particles, c.warmup, c.steps);
             sm_bench_result r;
             char err[1024];
             pid_t busy[BENCH_MAX_LOAD];
@@ -195,8 +199,7 @@ static sm_status bench_local(const bench_opts *o) {
             }
             if (o->progress && len > 0) fprintf(stderr, "\r%*s\r", len, "");
             if (rc != SM_OK) {
-                fprintf(stderr, "sandmpm bench: %dD %s, %d thread%s: %s\n", dim, prec, c.threads,
-                        c.threads == 1 ? "" : "s", err);
+                fprintf(stderr, "sandmpm bench: %dD %s, %s: %s\n", dim, prec, who, err);
                 return rc;
             }
             bench_emit(o, &r);
@@ -237,7 +240,8 @@ static void sibling_argv(const bench_opts *o, const char *path, const char *prec
         if (o->dim_mask & (1 << d)) k += (size_t)snprintf(sa->dims + k, sizeof sa->dims - k, "%s%d", k ? "," : "", d);
     k = 0;
     for (int t = 0; t < o->nthreads; t++)
-        k += (size_t)snprintf(sa->threads + k, sizeof sa->threads - k, "%s%d", t ? "," : "", o->threads[t]);
+        k += o->threads[t] ? (size_t)snprintf(sa->threads + k, sizeof sa->threads - k, "%s%d", t ? "," : "", o->threads[t])
+                           : (size_t)snprintf(sa->threads + k, sizeof sa->threads - k, "%sauto", t ? "," : "");
     snprintf(sa->particles, sizeof sa->particles, "%.17g", o->c.particles);
     snprintf(sa->steps, sizeof sa->steps, "%d", o->c.steps);
     snprintf(sa->warmup, sizeof sa->warmup, "%d", o->c.warmup);

@@ -10,7 +10,9 @@
  *     every barrier of the step for a time slice (measured: 1,001 steps of a 64-particle block
  *     took 21 ms per step with 2 threads beside a load of 14 on 2 cores, 0.1 ms with 1).
  * A probe ends early once it is clearly slower, so a bad candidate costs a few steps. Probes
- * back off (every 1, 2, 4, ... up to 256 windows of 16 steps) while the choice stays the same. */
+ * back off (every 1, 2, 4, ... up to 256 windows of 16 steps) while the choice stays the same,
+ * and are spaced further when the slower candidate's last window cost more than 2% of the time
+ * until the next probe (one stalled step beside a busy process can cost 150 steps' time). */
 #ifndef SM_INTEGRATE_GOVERNOR_H
 #define SM_INTEGRATE_GOVERNOR_H
 

@@ -28,6 +28,7 @@
 #define VTK_HEADER 1400.0
 #define PROBE_SECONDS 1.0
 #define PROBE_MAX_STEPS 50
+#define PROBE_RETRIES 60 /* refused steps retried in a row, as sm_world_advance */
 
 static double now_seconds(void) {
     struct timespec t;
@@ -50,6 +51,15 @@ static int count_bytes(void *user, const void *data, size_t n) {
     return 0;
 }
 
+/* One step as the run takes it: a refused dt (sm_world_step_refused) is retried at the smaller
+ * step sm_world_next_dt then returns, as sm_world_advance does. */
+static sm_status probe_step(sm_world *w) {
+    for (int tries = 0;; tries++) {
+        sm_status st = sm_world_step(w, sm_world_next_dt(w, INFINITY));
+        if (st == SM_OK || !sm_world_step_refused(w) || tries == PROBE_RETRIES) return st;
+    }
+}
+
 /* Steps until PROBE_SECONDS have passed (at least 3, at most PROBE_MAX_STEPS): the seconds and
  * particle-steps of all but the first (which allocates what the steps reuse). */
 static sm_status probe_steps(sm_world *w, int *steps, double *seconds, double *particle_steps) {
@@ -58,7 +68,7 @@ static sm_status probe_steps(sm_world *w, int *steps, double *seconds, double *p
     for (int k = 0; k < PROBE_MAX_STEPS && (k < 3 || now_seconds() - t0 < PROBE_SECONDS); k++) {
         sm_diagnostics d;
         sm_world_diagnostics(w, &d);
-        sm_status st = sm_world_step(w, sm_world_next_dt(w, INFINITY));
+        sm_status st = probe_step(w);
         if (st != SM_OK) return st;
         double t = now_seconds();
         if (k > 0) *seconds += t - t1, *particle_steps += (double)d.particles;

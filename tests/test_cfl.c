@@ -73,7 +73,9 @@ static void repro(sm_integrator integrator, const char *name) {
 static void refused_step(void) {
     sm_world *w = block_world(3, SM_INTEGRATOR_EXPLICIT);
     if (!w) return;
+    CHECK(!sm_world_step_refused(w)); /* before any step */
     CHECK(sm_world_step(w, sm_world_next_dt(w, 1.0)) == SM_OK); /* G2P has measured the speeds */
+    CHECK(!sm_world_step_refused(w));
     sm_particles_view pv;
     sm_world_particles(w, &pv);
     double x0[128], vmax = 0;
@@ -87,6 +89,7 @@ static void refused_step(void) {
     CHECK(sm_world_step(w, big) == SM_ERR_NUMERICAL);
     CHECK(strstr(sm_world_errmsg(w), "CFL") != NULL);
     CHECK(strstr(sm_world_errmsg(w), "not taken") != NULL);
+    CHECK(sm_world_step_refused(w));
     sm_world_particles(w, &pv);
     int same = 1;
     for (int k = 0; k < 128; k++) same &= (double)pv.x[k] == x0[k];
@@ -100,6 +103,7 @@ static void refused_step(void) {
     CHECK(next <= 0.5 * big);
     CHECK(next > 0);
     CHECK(sm_world_step(w, next) == SM_OK);
+    CHECK(!sm_world_step_refused(w));
     /* The cap is gone after a step taken: the controller's dt is cfl dx / vmax again. */
     CHECK(sm_world_next_dt(w, 1.0) > 0.5 * big);
     /* The controller's own dt at cfl = 1 always passes (the slack covers rounding). */

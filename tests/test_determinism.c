@@ -71,7 +71,7 @@ static uint64_t run(int dim, int threads, sm_kernel kernel, sm_transfer tr, int 
     *h0 = sm_world_state_hash(w);
     for (int i = 0; i < (implicit ? 10 : 50); i++) /* a dt the implicit solve refuses is retried (at half of it) */
         for (int tries = 0; sm_world_step(w, sm_world_next_dt(w, 10.0)) != SM_OK; tries++)
-            if (tries == 10 || strstr(sm_world_errmsg(w), "retry with a smaller dt") == NULL) {
+            if (tries == 10 || !sm_world_step_refused(w)) {
                 fprintf(stderr, "%s\n", sm_world_errmsg(w));
                 CHECK(0);
                 i = 50;

@@ -593,8 +593,14 @@ SM_API double sm_world_next_dt(sm_world *w, double t_end);
  *  sm_world_next_dt, which then returns at most half the refused dt). The implicit integrator
  *  refuses a dt above max_dt / 1024 in the same way (same status, world unchanged) when Newton
  *  does not converge in newton_max_iterations; at or below it the step is taken and counted in
- *  sm_diagnostics.newton_unconverged. sm_world_advance retries both refusals itself. */
+ *  sm_diagnostics.newton_unconverged. sm_world_advance retries both refusals itself; a caller
+ *  of sm_world_step tells a refusal from a failure with sm_world_step_refused. */
 SM_API sm_status sm_world_step(sm_world *w, double dt);
+
+/** 1 if the last sm_world_step was refused (the CFL check or an unconverged implicit solve) with
+ *  the world unchanged: retry with sm_world_next_dt, which returns at most half the refused dt.
+ *  0 after a step taken, a failure, or before any step. */
+SM_API int sm_world_step_refused(const sm_world *w);
 
 /** Adaptive steps until the world's time equals t_end exactly. A step refused by the CFL check or
  *  by an unconverged implicit solve (see sm_world_step) is retried with half the dt, up to 60

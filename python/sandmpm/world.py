@@ -405,8 +405,8 @@ class World:
             self._views.retire()
             if self._motions:
                 self._raise_motion_error()
-            if st != lib.SM_OK and retries < 60 and lib.sm_world_next_dt(w, t_end) < dt:
-                retries += 1  # refused by the CFL check, world intact: retry with half the dt, as sm_world_advance
+            if st != lib.SM_OK and retries < 60 and lib.sm_world_step_refused(w):
+                retries += 1  # refused (CFL check or implicit solve), world intact: retry at half the dt, as sm_world_advance
                 continue
             retries = 0
             self._check(st)

@@ -276,6 +276,8 @@ sm_status sm_world_step(sm_world *w, double dt) {
     return SM_OK;
 }
 
+int sm_world_step_refused(const sm_world *w) { return w && !w->failed && w->cfl_rejected; }
+
 /* ---- Time step choice ------------------------------------------------------------------- */
 
 double sm_world_time(const sm_world *w) { return w->time; }

@@ -331,10 +331,22 @@ cases.
 The failures are near or beyond the sliding threshold (tan 30° = 0.577): there the grid's Coulomb
 friction delivers less than μ times the normal force, so a block that should slide slowly slides
 too fast, and on the tilted (not grid aligned) separating plane a block that should stay (μ = 0.7)
-creeps (tests/test_incline.c holds that case on a slip plane). Why is not established here; a
-candidate is the normal support that reaches the block through grid nodes the contact test does not
-count (a separating contact counts a node only while its predicted φ̂ is below a tolerance), which
-carries no friction. Documented, not changed.
+creeps (tests/test_incline.c holds that case on a slip plane). The cause is the per-node Coulomb
+rule (3.102 applied node by node, as the thesis and the peers do): each contact node may remove at
+most μ times its own normal impulse, and the normal support is spread unevenly over the nodes. A dump
+of one step of test_incline's static block (2D, μ = 0.7, elastic_cfl 0.7) showed 33 contact nodes
+whose tangential-to-normal impulse ratios ran from 0.03 to 2.8 around the mean tan 30° = 0.577:
+light nodes deep in the plane carried large normal impulses at small ratios (they stick with
+capacity unused), nodes at the block's ends slipped. An experiment (a patch not in the program, measured 2026-12-02 on the 2-core machine with `sm_validate incline` and test_incline) that pools
+the rule over all contact nodes of a collider (stick all when |Σ m v_t| ≤ μ Σ m |Δv_n|, else scale
+every node's v_t by the same factor) brought this table's tilted μ = 0.5 case from +6.6e-2 to
++5.9e-3 and μ = 0.7 from 1.6e-2 to −3.7e-4, and test_incline's creep from 7.2 mm to 0.33 mm at
+elastic_cfl 0.5 and from 25.7 mm to 0.38 mm at 0.7, with the sliding cases unchanged (μ = 0.2:
+9.2e-5). But one pool per collider is wrong for sand, whose footprint can stick at the back and
+slide at the front; pooling over each node's 3^d or 5^d neighbourhood (the same rule, or the
+normal capacity shared among neighbours in proportion to their tangential momentum) did not fix
+it (tilted μ = 0.5: −1.5e-2 to +5.4e-2; the static creep 6 to 20 mm; errors up to 3% at μ = 0.2).
+A friction rule that pools over the contact patch and still lets parts of it slide is open.
 
 **Gravity-loaded elastic column** (`sm_validate column`): 2D plane strain, H = 1 m, width H/4 between
 slip walls on a slip base, ρ 1000, E 1e7, ν 0.3, released stress free; the stress is averaged over 8

@@ -24,7 +24,7 @@ return {
   integrator = params.explicit and "explicit" or "implicit",
   dim = 3, dx = dx, ppc = 8,
   fps = (q == "test") and 24 or 72, frames = (q == "test") and 2 or ((q == "paper") and 144 or 72),
-  max_dt = 1e-3,
+  max_dt = params.max_dt or 1e-3,
   domain = { min = {0, 0, 0}, max = {3.0, 1.4, 2.0} },
   materials = {
     sand = { model = "sand", density = 2200, E = 3.537e5, nu = 0.3, hardening = {35, 0, 0.2, 10} },

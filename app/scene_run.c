@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 
 #include "app/io/files.h"
+#include "app/run_folder.h"
 #include "app/run_outputs.h"
 
 sm_scene_run_opts sm_scene_run_opts_default(void) {
@@ -17,52 +18,20 @@ sm_scene_run_opts sm_scene_run_opts_default(void) {
     return o;
 }
 
-static int has_frames(const sm_run_manifest *m) {
-    for (int k = 0; k < SM_FRAME_KINDS; k++)
-        if (sm_run_manifest_count(m, (sm_frame_kind)k) > 0) return 1;
-    return 0;
-}
-
-/* Removes what old lists, and the frame after its last of each kind (a killed run's). */
-static sm_status remove_old(const char *out, const sm_run_manifest *old, char *err, size_t errlen) {
-    int removed = 0;
-    sm_status st = sm_run_manifest_remove(out, old, &removed, err, errlen);
-    for (int k = 0; st == SM_OK && k < SM_FRAME_KINDS; k++) {
-        const int next = sm_run_manifest_count(old, (sm_frame_kind)k) > 0 ? old->last[k] + 1 : 0;
-        char path[SM_PATH_MAX];
-        if (snprintf(path, sizeof path, "%s/frame_%04d.%s", out, next, sm_frame_kind_ext((sm_frame_kind)k)) <
-            (int)sizeof path)
-            remove(path);
-    }
-    return st;
-}
-
-/* The folder without a manifest: refused if it holds frame files, unless overwrite. */
-static sm_status claim_unlisted(const char *out, int overwrite, char *err, size_t errlen) {
-    sm_run_manifest old;
-    int nfound = 0;
-    sm_status st = sm_run_manifest_scan(out, &old, &nfound, err, errlen);
-    if (st != SM_OK || nfound == 0) return st;
-    if (overwrite) return remove_old(out, &old, err, errlen);
-    snprintf(err, errlen, "%s/ holds %d frame files (frame_NNNN.ply/.vtp/.png) but no %s; refusing to mix them with "
-                          "this run (overwrite removes them)", out, nfound, SM_RUN_MANIFEST_NAME);
-    return SM_ERR_INVALID;
-}
-
-/* The folder claimed for a run described by start (cli/out_folder.c's rules, without resume). */
+/* The folder claimed for a run described by start (app/run_folder.h's rules, without resume),
+ * with the refusals worded for a binding (overwrite instead of --overwrite). */
 static sm_status claim(const char *out, const sm_run_manifest *start, int overwrite, char *err, size_t errlen) {
-    sm_run_manifest old;
-    int found = 0;
-    sm_status st = sm_run_manifest_read(out, &old, &found, err, errlen);
-    if (!found) return claim_unlisted(out, overwrite, err, errlen);
-    if (st == SM_ERR_IO) return st;
-    if (st != SM_OK) return overwrite ? claim_unlisted(out, 1, err, errlen) : st;
-    if (old.scene_hash == start->scene_hash || overwrite || !has_frames(&old)) return remove_old(out, &old, err, errlen);
-    snprintf(err, errlen, "%s/ holds the frames of another run (%s, quality %s, scene hash %016llx; this run: %s, "
-                          "quality %s, hash %016llx); refusing to mix the two runs (overwrite removes that run's files)",
-             out, old.scene, old.quality, (unsigned long long)old.scene_hash, start->scene, start->quality,
-             (unsigned long long)start->scene_hash);
-    return SM_ERR_INVALID;
+    sm_folder_claim c;
+    sm_status st = sm_claim_folder(out, start, overwrite, &c, err, errlen);
+    if (c.outcome == SM_CLAIM_REFUSED_UNLISTED)
+        snprintf(err, errlen, "%s/ holds %d frame files (frame_NNNN.ply/.vtp/.png) but no %s; refusing to mix them with "
+                              "this run (overwrite removes them)", out, c.found_files, SM_RUN_MANIFEST_NAME);
+    else if (c.outcome == SM_CLAIM_REFUSED_OTHER)
+        snprintf(err, errlen, "%s/ holds the frames of another run (%s, quality %s, scene hash %016llx; this run: %s, "
+                              "quality %s, hash %016llx); refusing to mix the two runs (overwrite removes that run's files)",
+                 out, c.old.scene, c.old.quality, (unsigned long long)c.old.scene_hash, start->scene, start->quality,
+                 (unsigned long long)start->scene_hash);
+    return st;
 }
 
 /* Created, cleared of a killed process's temporaries (and its checkpoints/ too). */

@@ -159,7 +159,10 @@ static int run(const scenario *s, int threads) {
     printf("%s threads=%d start %016llx\n", s->name, threads, (unsigned long long)sm_world_state_hash(w));
     int rc = 0;
     for (int i = 1; i <= s->steps; i++) {
-        if (sm_world_step(w, sm_world_next_dt(w, 10.0)) != SM_OK) {
+        sm_status st = sm_world_step(w, sm_world_next_dt(w, 10.0));
+        for (int tries = 0; st != SM_OK && sm_world_step_refused(w) && tries < 60; tries++)
+            st = sm_world_step(w, sm_world_next_dt(w, 10.0)); /* a refused dt, retried at half of it */
+        if (st != SM_OK) {
             printf("%s threads=%d step %d failed: %s\n", s->name, threads, i, sm_world_errmsg(w));
             rc = 1;
             break;

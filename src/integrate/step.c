@@ -126,6 +126,13 @@ static void p2g(sm_world *w, const sm_step_ctx *c) {
     w->stages->p2g(&io, c);
 }
 
+/* A step refused before anything outside the grid moved (the CFL check, an unconverged implicit
+ * solve): the world stays usable and sm_world_next_dt offers at most half the refused dt. */
+static void refuse_step(sm_world *w, double dt) {
+    w->step_refused = 1;
+    w->dt_cap = 0.5 * dt;
+}
+
 /* 4-5. Grid velocities v-bar, v-tilde (and v^n for FLIP): explicit update or implicit solve. */
 /* An implicit step above this fraction of max_dt whose Newton solve does not converge is refused
  * (retried at half the dt); at or below it, it is taken and counted as unconverged. */
@@ -146,9 +153,8 @@ static sm_status grid_velocities(sm_world *w, const sm_step_ctx *c) {
     if (st != SM_OK)
         return sm_world_fail(w, st, "step %llu (t = %.6g s, dt = %.3g s): the implicit solve diverged (residual %g)",
                              (unsigned long long)w->steps + 1, w->time, c->dt, w->newton.last_norm);
-    if (!w->newton.last_converged && io.may_reject) { /* only the grid has changed: retry at half the dt */
-        w->cfl_rejected = 1;
-        w->dt_cap = 0.5 * c->dt;
+    if (!w->newton.last_converged && io.may_reject) { /* only the grid has changed */
+        refuse_step(w, c->dt);
         return sm_world_fail(w, SM_ERR_NUMERICAL,
                              "step %llu (t = %.6g s): Newton did not converge in %d iterations at dt = %.3g s (residual "
                              "%.3g m/s^2); the world is intact: retry with a smaller dt",
@@ -180,31 +186,28 @@ void sm_world_init_stress(sm_world *w, size_t first) { plasticity(w, first); }
 /* ---- The step --------------------------------------------------------------------------- */
 
 /* Before anything moves: finite state and the CFL bound. A CFL violation alone leaves the world
- * usable (w->cfl_rejected; the caller may retry with a smaller dt); non-finite state stops it. */
+ * usable (w->step_refused; the caller may retry with a smaller dt); non-finite state stops it. */
 static sm_status check_start(sm_world *w, double dt) {
     const double t = sm_seconds();
     int too_fast = 0;
     const sm_status st = sm_health_check_start(w, dt, &too_fast);
     w->stage_seconds[SM_STAGE_CHECKS] += sm_seconds() - t;
     if (st != SM_OK) {
-        if (too_fast) {
-            w->cfl_rejected = 1;
-            w->dt_cap = 0.5 * dt;
-        } else {
-            w->failed = 1;
-        }
+        if (too_fast) refuse_step(w, dt);
+        else w->failed = 1;
     }
     return st;
 }
 
-/* Runs a stage that can fail, times it into stage_seconds[stage]; a failure stops the world
- * (the stage has written the message). */
+/* Runs a stage that can fail, times it into stage_seconds[stage]; a failure stops the world, a
+ * refusal (refuse_step) leaves it usable (the stage has written the message). */
 #define STAGE(w, t, stage, call)          \
     do {                                  \
         const sm_status st_ = (call);     \
         lap((w), (stage), (t));           \
         if (st_ != SM_OK) {               \
-            (w)->failed = 1;              \
+            if (!(w)->step_refused)       \
+                (w)->failed = 1;          \
             return st_;                   \
         }                                 \
     } while (0)
@@ -216,12 +219,7 @@ static sm_status step_particles(sm_world *w, const sm_step_ctx *c) {
     STAGE(w, &t, SM_STAGE_SORT, bin_particles(w, c));     /* 2 */
     p2g(w, c);                                            /* 3 */
     lap(w, SM_STAGE_P2G, &t);
-    const sm_status grid_st = grid_velocities(w, c);      /* 4-5 */
-    lap(w, SM_STAGE_GRID, &t);
-    if (grid_st != SM_OK) {
-        if (!w->cfl_rejected) w->failed = 1; /* a refused implicit dt leaves the world usable */
-        return grid_st;
-    }
+    STAGE(w, &t, SM_STAGE_GRID, grid_velocities(w, c));  /* 4-5 */
     STAGE(w, &t, SM_STAGE_CHECKS, sm_health_check_grid(w, c->dt));
     g2p(w, c);                                            /* 6 */
     lap(w, SM_STAGE_G2P, &t);
@@ -251,7 +249,7 @@ sm_status sm_world_step(sm_world *w, double dt) {
     if (w->failed)
         return sm_world_fail(w, SM_ERR_NUMERICAL, "the world stopped after a numerical failure at step %llu; create a new one",
                              (unsigned long long)w->steps);
-    w->cfl_rejected = 0;
+    w->step_refused = 0;
     if (!(dt > 0) || !isfinite(dt)) return sm_world_fail(w, SM_ERR_INVALID, "step: dt must be > 0, got %g", dt);
     if (w->governed) w->threads = sm_governor_threads(&w->gov);
     const double t_start = sm_seconds();
@@ -276,7 +274,7 @@ sm_status sm_world_step(sm_world *w, double dt) {
     return SM_OK;
 }
 
-int sm_world_step_refused(const sm_world *w) { return w && !w->failed && w->cfl_rejected; }
+int sm_world_step_refused(const sm_world *w) { return w && !w->failed && w->step_refused; }
 
 /* ---- Time step choice ------------------------------------------------------------------- */
 
@@ -358,7 +356,7 @@ sm_status sm_world_advance(sm_world *w, double t_end) {
         const int last = (dt == t_end - w->time);
         if (!last && !(dt >= SM_RUNAWAY_DT_FRACTION * w->def.max_dt)) return runaway(w, dt);
         const sm_status st = sm_world_step(w, dt);
-        if (st != SM_OK && w->cfl_rejected && retries < SM_CFL_RETRIES) {
+        if (st != SM_OK && w->step_refused && retries < SM_CFL_RETRIES) {
             retries++;
             continue;
         }

@@ -71,7 +71,7 @@ struct sm_world {
     sm_implicit_stats newton;
     double step_vmax2;      /* largest particle speed^2 after the last G2P */
     int step_bad;           /* the last step produced a non-finite particle value */
-    int cfl_rejected;       /* the last sm_world_step refused its dt, by the CFL check or an unconverged
+    int step_refused;       /* the last sm_world_step refused its dt, by the CFL check or an unconverged
                                implicit solve (world intact) */
     double dt_cap;          /* after such a refusal half the refused dt, which sm_world_next_dt
                              * respects until a step is taken; else INFINITY */

@@ -5,7 +5,8 @@ set -euo pipefail
 
 # libassimp-dev: mesh files. python3-*: the Python package (cffi in ABI mode, NumPy views) and its
 # tests (pytest, run by CTest). gnuplot-nox: the validation study's plots (scripts/validate.sh).
-PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev zlib1g-dev python3 python3-cffi python3-numpy python3-pytest libassimp-dev gnuplot-nox)
+# libopenmpi-dev, openmpi-bin: distributed runs (sandmpm_mpi.h) and their tests under mpirun.
+PACKAGES=(cmake make gcc clang libomp-14-dev libc6-dev liblua5.4-dev libpng-dev zlib1g-dev python3 python3-cffi python3-numpy python3-pytest libassimp-dev gnuplot-nox libopenmpi-dev openmpi-bin)
 
 missing=()
 for p in "${PACKAGES[@]}"; do

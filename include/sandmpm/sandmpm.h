@@ -572,6 +572,7 @@ typedef enum sm_stage {
     SM_STAGE_G2P,        /**< grid to particle: velocity, B, position, F */
     SM_STAGE_PLASTICITY, /**< SVD, return mapping, hardening, next step's stress */
     SM_STAGE_CHECKS,     /**< NaN/Inf and CFL checks of particle and grid state */
+    SM_STAGE_EXCHANGE,   /**< distributed runs: particles migrating and ghosts between ranks */
     SM_STAGE_COUNT
 } sm_stage;
 
@@ -647,8 +648,14 @@ SM_API void sm_world_diagnostics(const sm_world *w, sm_diagnostics *out);
 /** Resets min_dt/max_dt tracking (e.g. at each frame). */
 SM_API void sm_world_reset_step_stats(sm_world *w);
 
-/** A 64-bit hash of all particle state (bitwise), for determinism checks. */
+/** A 64-bit hash of all particle state (bitwise), for determinism checks; in storage order. */
 SM_API uint64_t sm_world_state_hash(const sm_world *w);
+
+/** The same state hash with the particles taken in ascending id: equal for any storage order,
+ * thread count and, in a distributed world (sandmpm_mpi.h), any number of ranks. In a
+ * distributed world it is collective (every rank calls it; every rank gets the hash of all the
+ * ranks' particles). 0 when out of memory. */
+SM_API uint64_t sm_world_id_hash(const sm_world *w);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Checkpoints (docs/checkpoints.md)                                                            */

@@ -5,8 +5,9 @@
  * touches nodes 4 b .. 4 b + 6 per axis only, i.e. the 2^d grid blocks b + {0,1}^d, which are
  * exactly the live grid blocks (grid.h). Particle blocks of the same colour (block coordinates
  * equal mod 2) never share a node, so P2G scatters one colour at a time, blocks of a colour in
- * parallel, particles of a block in order: every node sums its contributions in the same order
- * for any thread count (bitwise identical results). */
+ * parallel, particles of a block in ascending id: every node sums its contributions in the same
+ * order for any thread count, any storage order and (with MPI) any number of ranks (bitwise
+ * identical results). */
 #ifndef SM_GRID_BIN_H
 #define SM_GRID_BIN_H
 
@@ -25,7 +26,7 @@ typedef struct sm_pblock {
 
 /* The binning of one step, grown as needed, never shrunk. */
 typedef struct sm_bins {
-    uint32_t *perm;         /* particle indices grouped by particle block, stable (capacity: the
+    uint32_t *perm;         /* particle indices grouped by particle block, ascending id within a block (capacity: the
                                particles', sm_bins_reserve_perm) */
     size_t perm_cap;
     sm_pblock *pb;          /* this step's non-empty particle blocks, ascending key */
@@ -39,6 +40,8 @@ typedef struct sm_bins {
     size_t color_cap;
     uint32_t color_count[8], color_offset[9];
     uint64_t reorders;      /* times the particle storage was reordered by block */
+    int keep_storage;       /* never reorder the storage (a distributed world's storage holds its
+                               particles, then ghosts: dist/exchange.c reorders its particles) */
 } sm_bins;
 
 void sm_bins_free(sm_bins *b);

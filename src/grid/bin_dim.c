@@ -9,6 +9,9 @@
  *   2. add_new_blocks: blocks not known yet, in particle order; then step 1 again;
  *   3. sort_blocks + scatter_particles + publish_blocks: the non-empty blocks in ascending key
  *      order, per-thread cursors, perm (stable), the new block list and its hash;
+ *      order_by_id: within a block the particles in ascending id, so that the order P2G sums a
+ *      block's particles in is a function of the particles alone, not of the storage order
+ *      (which reorders, resumed checkpoints and, with MPI, migration between ranks change);
  *   4. live_grid_blocks + link_grid_slots: the 2^d grid blocks of every particle block, in
  *      ascending key order, zeroed for P2G; each particle block's slots;
  *   5. colour_lists: particle blocks grouped by colour for the race-free scatter;
@@ -185,6 +188,27 @@ static void publish_blocks(sm_bins *b, size_t nne, int T) {
     for (size_t r = 0; r < nne; r++) sm_block_hash_put(&b->pb_hash, b->pb[r].key, (uint32_t)r);
 }
 
+/* 3d. Each block's stretch of perm in ascending particle id. Storage order is mostly block order
+ * already, so a block's particles are a few runs sorted by id (the previous block order): an
+ * insertion sort costs about one comparison per particle. */
+static void order_by_id(sm_bins *b, const uint32_t *id, int T) {
+    uint32_t *perm = b->perm;
+    const long nb = (long)b->npb;
+#pragma omp parallel for schedule(static) num_threads(T)
+    for (long r = 0; r < nb; r++) {
+        const uint32_t s = b->pb[r].start, e = b->pb[r].end;
+        for (uint32_t i = s + 1; i < e; i++) {
+            const uint32_t p = perm[i], key = id[p];
+            uint32_t j = i;
+            while (j > s && id[perm[j - 1]] > key) {
+                perm[j] = perm[j - 1];
+                j--;
+            }
+            perm[j] = p;
+        }
+    }
+}
+
 /* Key of grid block cb (0 .. 2^d - 1) of particle block bc; 0 in *inside if outside the domain. */
 static inline uint64_t neighbour_key(const sm_grid *g, const int bc[3], int cb, int *inside) {
     int o[3] = {0, 0, 0};
@@ -248,6 +272,7 @@ static sm_status colour_lists(sm_bins *b) {
  * than 16 in a row on average); perm becomes the identity. */
 static void reorder_if_scattered(sm_bins *b, sm_particles *P) {
     const size_t n = P->n;
+    if (b->keep_storage) return;
     size_t breaks = 0;
     for (size_t i = 1; i < n; i++) breaks += b->perm[i] != b->perm[i - 1] + 1;
     if (breaks * 16 > n) {
@@ -270,6 +295,7 @@ sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const
     const size_t nne = sort_blocks(b, T);
     scatter_particles(b, P->x, n, c, T);
     publish_blocks(b, nne, T);
+    order_by_id(b, P->id, T);
     if (live_grid_blocks(b, g) != SM_OK) return SM_ERR_NOMEM;
     link_grid_slots(b, g);
     sm_grid_zero(g, T);

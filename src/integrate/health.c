@@ -68,16 +68,22 @@ sm_status sm_health_check_start(sm_world *w, double dt, int *too_fast) {
 }
 
 /* First node whose v-bar or v-tilde is not finite, or -1. */
-static long first_bad_node(const sm_grid *g) {
+/* The first node with a non-finite velocity; a distributed world checks only the blocks its own
+ * particles read (the outer edge of its ghost layer is incomplete: dist/dist.h). */
+static long first_bad_node(const sm_world *w) {
+    const sm_grid *g = &w->grid;
     const sm_grid_vel vel = sm_grid_vel_arrays(g);
-    const size_t n = g->nactive * (size_t)g->block_nodes * (size_t)g->dim;
-    for (size_t k = 0; k < n; k++)
-        if (!isfinite(vel.vtilde[k]) || !isfinite(vel.vbar[k])) return (long)(k / (size_t)g->dim);
+    const size_t per_block = (size_t)g->block_nodes * (size_t)g->dim;
+    for (size_t s = 0; s < g->nactive; s++) {
+        if (w->dist && !sm_dist_block_complete(w, g->key[s])) continue;
+        for (size_t k = s * per_block; k < (s + 1) * per_block; k++)
+            if (!isfinite(vel.vtilde[k]) || !isfinite(vel.vbar[k])) return (long)(k / (size_t)g->dim);
+    }
     return -1;
 }
 
 sm_status sm_health_check_grid(sm_world *w, double dt) {
-    const long bad = first_bad_node(&w->grid);
+    const long bad = first_bad_node(w);
     if (bad < 0) return SM_OK;
     int ijk[3];
     sm_grid_node_coords(&w->grid, (size_t)bad, ijk);

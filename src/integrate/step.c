@@ -52,6 +52,9 @@ static void lap(sm_world *w, sm_stage s, double *t) {
 
 /* ---- The stages' arguments, from the world ---------------------------------------------- */
 
+/* The particles this rank updates: all of them, or a distributed world's own (the ghosts follow). */
+static size_t owned(const sm_world *w) { return w->dist ? sm_dist_owned(w) : w->p.n; }
+
 static sm_grid_colliders grid_colliders(const sm_world *w) {
     sm_grid_colliders gc = {w->colliders, w->ncolliders + w->nwalls, w->def.static_friction_sticks};
     return gc;
@@ -99,13 +102,13 @@ static sm_g2p_io g2p_io(sm_world *w) {
     sm_particles *P = &w->p;
     const sm_grid_vel vel = sm_grid_vel_arrays(&w->grid);
     sm_g2p_io io = {P->n, P->x, P->v, P->B, P->F, &w->bins, w->cache.data, vel.vn, vel.vbar, vel.vtilde,
-                    w->colliders, w->ncolliders, w->def.particle_projection};
+                    w->colliders, w->ncolliders, w->def.particle_projection, owned(w)};
     return io;
 }
 
 static sm_plasticity_io plasticity_io(sm_world *w, size_t first) {
     sm_particles *P = &w->p;
-    sm_plasticity_io io = {first, P->n, P->F, P->alpha, P->q, P->tau, P->mat, w->mats, w->threads};
+    sm_plasticity_io io = {first, owned(w), P->F, P->alpha, P->q, P->tau, P->mat, w->mats, w->threads};
     return io;
 }
 
@@ -185,17 +188,35 @@ void sm_world_init_stress(sm_world *w, size_t first) { plasticity(w, first); }
 
 /* ---- The step --------------------------------------------------------------------------- */
 
+/* A distributed world's ranks take the same branch: a check that fails on one rank fails on all,
+ * a refusal on one (and none failing) is a refusal on all. `refused`: this rank's check refused. */
+static sm_status agree(sm_world *w, double dt, sm_status st, int *refused) {
+    if (!w->dist) return st;
+    const int mine = st == SM_OK ? 0 : (*refused ? 1 : 2);
+    const int worst = sm_dist_max_int(w, mine);
+    if (worst == mine) return st;
+    *refused = worst == 1;
+    if (*refused) refuse_step(w, dt);
+    return sm_world_fail(w, SM_ERR_NUMERICAL, "step %llu (t = %.6g s): another rank's check %s the step",
+                         (unsigned long long)w->steps + 1, w->time, *refused ? "refused" : "failed");
+}
+
+/* A grid or end-of-step check, agreed between the ranks. */
+static sm_status agreed(sm_world *w, double dt, sm_status st) {
+    int refused = 0;
+    return agree(w, dt, st, &refused);
+}
+
 /* Before anything moves: finite state and the CFL bound. A CFL violation alone leaves the world
  * usable (w->step_refused; the caller may retry with a smaller dt); non-finite state stops it. */
 static sm_status check_start(sm_world *w, double dt) {
     const double t = sm_seconds();
     int too_fast = 0;
-    const sm_status st = sm_health_check_start(w, dt, &too_fast);
+    sm_status st = w->p.n > 0 ? sm_health_check_start(w, dt, &too_fast) : SM_OK;
+    if (st != SM_OK && too_fast) refuse_step(w, dt);
+    st = agree(w, dt, st, &too_fast);
     w->stage_seconds[SM_STAGE_CHECKS] += sm_seconds() - t;
-    if (st != SM_OK) {
-        if (too_fast) refuse_step(w, dt);
-        else w->failed = 1;
-    }
+    if (st != SM_OK && !too_fast) w->failed = 1;
     return st;
 }
 
@@ -216,16 +237,23 @@ static sm_status check_start(sm_world *w, double dt) {
  * pre-step check. */
 static sm_status step_particles(sm_world *w, const sm_step_ctx *c) {
     double t = sm_seconds();
-    STAGE(w, &t, SM_STAGE_SORT, bin_particles(w, c));     /* 2 */
-    p2g(w, c);                                            /* 3 */
-    lap(w, SM_STAGE_P2G, &t);
-    STAGE(w, &t, SM_STAGE_GRID, grid_velocities(w, c));  /* 4-5 */
-    STAGE(w, &t, SM_STAGE_CHECKS, sm_health_check_grid(w, c->dt));
-    g2p(w, c);                                            /* 6 */
-    lap(w, SM_STAGE_G2P, &t);
-    plasticity(w, 0);                                     /* 7 */
-    lap(w, SM_STAGE_PLASTICITY, &t);
-    STAGE(w, &t, SM_STAGE_CHECKS, sm_health_check_end(w, c->dt));
+    if (w->dist) STAGE(w, &t, SM_STAGE_EXCHANGE, sm_dist_exchange(w, c)); /* migration, ghosts */
+    const int any = w->p.n > 0; /* always on one rank; a distributed rank may hold none */
+    if (any) {
+        STAGE(w, &t, SM_STAGE_SORT, bin_particles(w, c)); /* 2 */
+        p2g(w, c);                                        /* 3 */
+        lap(w, SM_STAGE_P2G, &t);
+        STAGE(w, &t, SM_STAGE_GRID, grid_velocities(w, c)); /* 4-5 */
+    }
+    STAGE(w, &t, SM_STAGE_CHECKS, agreed(w, c->dt, any ? sm_health_check_grid(w, c->dt) : SM_OK));
+    if (any) {
+        g2p(w, c); /* 6 */
+        lap(w, SM_STAGE_G2P, &t);
+        plasticity(w, 0); /* 7 */
+        lap(w, SM_STAGE_PLASTICITY, &t);
+    }
+    STAGE(w, &t, SM_STAGE_CHECKS, agreed(w, c->dt, any ? sm_health_check_end(w, c->dt) : SM_OK));
+    if (w->dist) sm_dist_end_step(w); /* the ghosts dropped */
     return SM_OK;
 }
 
@@ -253,13 +281,13 @@ sm_status sm_world_step(sm_world *w, double dt) {
     if (!(dt > 0) || !isfinite(dt)) return sm_world_fail(w, SM_ERR_INVALID, "step: dt must be > 0, got %g", dt);
     if (w->governed) w->threads = sm_governor_threads(&w->gov);
     const double t_start = sm_seconds();
-    if (w->p.n > 0) {
+    if (w->p.n > 0 || w->dist) {
         const sm_status st = check_start(w, dt);
         if (st != SM_OK) return st;
     }
     const sm_step_ctx c = step_ctx(w, dt);
     colliders_begin_step(w, dt);                      /* poses at t^n and t^n+1 */
-    if (w->p.n > 0) {
+    if (w->p.n > 0 || w->dist) {
         const sm_status st = step_particles(w, &c);   /* 2-7 */
         if (st != SM_OK) return st;
     }
@@ -313,6 +341,7 @@ double sm_world_next_dt(sm_world *w, double t_end) {
     double t0 = sm_seconds();
     double dt = w->def.max_dt;
     double vmax = max_particle_speed(w);
+    if (w->dist) vmax = sm_dist_max(w, vmax); /* exact: the same dt on every rank */
     if (vmax > 0) dt = fmin(dt, w->def.cfl * w->def.dx / vmax);
     if (w->def.elastic_cfl > 0 && w->def.integrator == SM_INTEGRATOR_EXPLICIT) {
         double c = 0;

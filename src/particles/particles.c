@@ -111,6 +111,11 @@ static inline __attribute__((always_inline)) void move_d(sm_particles *p, int d,
 #undef SM_X_
 }
 
+void sm_particles_move(sm_particles *p, int dim, size_t dst, size_t src) {
+    if (dim == 2) move_d(p, 2, dst, src);
+    else move_d(p, 3, dst, src);
+}
+
 void sm_particles_pack(const sm_particles *p, int dim, size_t i, void *buf) {
     if (dim == 2) pack_d(p, 2, i, buf);
     else pack_d(p, 3, i, buf);
@@ -163,5 +168,40 @@ uint64_t sm_particles_hash(const sm_particles *p, int dim) {
         const sm_particle_field f = sm_particle_field_info(dim, k);
         if (f.hashed) h = sm_hash64(sm_particles_field_data(p, k), n * (size_t)f.count * f.elem_size, h);
     }
+    return h;
+}
+
+uint64_t sm_particles_hash_ordered(const sm_particles *p, int dim, const uint32_t *order) {
+    const size_t n = p->n;
+    uint64_t h = SM_HASH_INIT;
+    h = sm_hash64(&n, sizeof n, h);
+    for (int k = 0; k < SM_PARTICLE_NFIELDS; k++) {
+        const sm_particle_field f = sm_particle_field_info(dim, k);
+        if (!f.hashed) continue;
+        const size_t bytes = (size_t)f.count * f.elem_size;
+        const unsigned char *data = sm_particles_field_data(p, k);
+        for (size_t i = 0; i < n; i++) h = sm_hash64(data + (size_t)order[i] * bytes, bytes, h);
+    }
+    return h;
+}
+
+static int cmp_u64(const void *a, const void *b) {
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+uint64_t sm_particles_hash_by_id(const sm_particles *p, int dim) {
+    const size_t n = p->n;
+    uint64_t *pairs = malloc((n ? n : 1) * sizeof *pairs);
+    uint32_t *order = malloc((n ? n : 1) * sizeof *order);
+    uint64_t h = 0;
+    if (pairs && order) {
+        for (size_t i = 0; i < n; i++) pairs[i] = ((uint64_t)p->id[i] << 32) | (uint64_t)i;
+        qsort(pairs, n, sizeof *pairs, cmp_u64);
+        for (size_t i = 0; i < n; i++) order[i] = (uint32_t)pairs[i];
+        h = sm_particles_hash_ordered(p, dim, order);
+    }
+    free(pairs);
+    free(order);
     return h;
 }

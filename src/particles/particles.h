@@ -95,7 +95,15 @@ void sm_particles_unpack(sm_particles *p, int dim, size_t i, const void *buf);
  * cycles; the top bit of perm's entries is used as a mark), then sets perm to the identity. */
 void sm_particles_permute(sm_particles *p, int dim, uint32_t *perm);
 
+/* Copies every field of particle src to position dst (both < cap). */
+void sm_particles_move(sm_particles *p, int dim, size_t dst, size_t src);
+
 /* FNV-1a hash of the particle count and the hashed fields of particles [0, n). */
 uint64_t sm_particles_hash(const sm_particles *p, int dim);
+/* The same hash with the particles taken in the given order (order[i] < n, a permutation):
+ * sm_particles_hash when order is the identity. */
+uint64_t sm_particles_hash_ordered(const sm_particles *p, int dim, const uint32_t *order);
+/* The hash in ascending id (the same for any storage order); 0 when out of memory. */
+uint64_t sm_particles_hash_by_id(const sm_particles *p, int dim);
 
 #endif

@@ -222,6 +222,7 @@ void SM_FN(sm_g2p)(const sm_g2p_io *io, const sm_step_ctx *c, sm_g2p_stats *st) 
         sm_bins_range(bins, NULL, 0, nb, T, t, &blo, &bhi);
         for (long b = blo; b < bhi; b++) {
             const sm_pblock *pb = &bins->pb[b];
+            if (bins->perm[pb->start] >= io->owned) continue; /* a ghost block */
             g2p_gather(io, c, pb, cache);
             g2p_acc acc;
             for (int a = 0; a < D; a++) {

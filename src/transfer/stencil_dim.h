@@ -58,14 +58,16 @@ static inline __attribute__((always_inline)) void chunk_weights(int S, const dou
                                                                 const sm_step_ctx *c, const int bc[3],
                                                                 wchunk *restrict wc) {
     /* Positions: read in place when the chunk's particles are consecutive in storage (the usual
-     * case: a block's indices increase, so equal span and count mean consecutive) and WCH of them
-     * exist from the first; else copied (lanes past cnt: the first particle). No gathers: they are
-     * slow here. A partial chunk reads past its particles only with `overread` (P2G: nobody writes
-     * positions then; G2P moves other blocks' particles concurrently). */
+     * case: storage is mostly in block order, and a block's particles in ascending id) and WCH of
+     * them exist from the first; else copied (lanes past cnt: the first particle). No gathers:
+     * they are slow here. A partial chunk reads past its particles only with `overread` (P2G:
+     * nobody writes positions then; G2P moves other blocks' particles concurrently). */
     const double *xb;
     double xl[WCH * D];
     const uint32_t q0 = perm[i0];
-    if (perm[i0 + (uint32_t)cnt - 1] - q0 == (uint32_t)(cnt - 1) && (size_t)q0 + WCH <= n && (overread || cnt == WCH)) {
+    int run = (size_t)q0 + WCH <= n && (overread || cnt == WCH);
+    for (int j = 1; j < cnt; j++) run &= perm[i0 + (uint32_t)j] == q0 + (uint32_t)j;
+    if (run) {
         xb = x + (size_t)q0 * D;
     } else {
         for (int j = 0; j < WCH; j++) {

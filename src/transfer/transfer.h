@@ -55,6 +55,8 @@ typedef struct sm_g2p_io {
     const sm_collider *colliders; /* user colliders (not the walls), for the projection */
     int ncolliders;
     int particle_projection;      /* def.particle_projection */
+    size_t owned;                 /* particles [0, owned) are this rank's: G2P skips the blocks of
+                                     the others (ghosts, dist/dist.h); n on one rank */
 } sm_g2p_io;
 
 /* What G2P measured. */

@@ -118,3 +118,8 @@ void sm_world_reset_step_stats(sm_world *w) {
 
 uint64_t sm_world_state_hash(const sm_world *w) { return sm_particles_hash(&w->p, w->dim); }
 
+uint64_t sm_world_id_hash(const sm_world *w) {
+    if (w->dist) return sm_dist_id_hash(w);
+    return sm_particles_hash_by_id(&w->p, w->dim);
+}
+

@@ -54,6 +54,7 @@ sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions,
         P->id[p] = (uint32_t)w->next_id++;
     }
     P->n = first + n;
+    if (w->dist) sm_dist_adopt(w, first); /* every rank added them: each keeps its blocks' */
     w->dirty = 1;
     return SM_OK;
 }

@@ -26,7 +26,7 @@ const char *sm_version(void) { return SM_VERSION_STRING; }
 int sm_real_is_double(void) { return SM_DOUBLE; }
 
 const char *sm_stage_name(sm_stage s) {
-    static const char *names[SM_STAGE_COUNT] = {"dt", "sort", "p2g", "grid", "g2p", "plasticity", "checks"};
+    static const char *names[SM_STAGE_COUNT] = {"dt", "sort", "p2g", "grid", "g2p", "plasticity", "checks", "exchange"};
     return (s >= 0 && s < SM_STAGE_COUNT) ? names[s] : "?";
 }
 
@@ -219,6 +219,7 @@ void sm_world_destroy(sm_world *w) {
     sm_grid_free(&w->grid);
     sm_transfer_cache_free(&w->cache);
     sm_implicit_ws_free(&w->imp);
+    sm_dist_free(w->dist);
     free(w->mats);
     for (int i = 0; i < w->ncolliders; i++) sm_collider_release_meshes(&w->colliders[i]);
     free(w->colliders);

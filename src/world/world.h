@@ -13,6 +13,7 @@
 #define SM_WORLD_H
 
 #include "collide/collide.h"
+#include "dist/dist.h"
 #include "core/common.h"
 #include "grid/bin.h"
 #include "grid/grid.h"
@@ -61,6 +62,7 @@ struct sm_world {
     sm_bins bins;
     sm_transfer_cache cache;
     sm_implicit_ws imp;
+    sm_dist *dist;           /* a distributed world's part (dist/dist.h); NULL on one rank */
 
     /* Time and statistics. */
     double time;

@@ -18,7 +18,7 @@ def test_diagnostics_has_every_field_by_name():
         d = w.diagnostics()
         assert list(d) == [name for name, _ in sm.ffi.typeof("sm_diagnostics").fields]
         assert list(d["stage_seconds"]) == sm.stage_names() == [
-            "dt", "sort", "p2g", "grid", "g2p", "plasticity", "checks"]
+            "dt", "sort", "p2g", "grid", "g2p", "plasticity", "checks", "exchange"]
         assert all(s >= 0 for s in d["stage_seconds"].values())
         assert d["particles"] == len(w) and d["steps"] == 1 and d["time"] == w.time == d["last_dt"] > 0
         masses = w.masses()

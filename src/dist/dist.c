@@ -1,0 +1,304 @@
+/* The distributed world (dist.h, sandmpm_mpi.h): the decomposition of the particle blocks into
+ * Morton ranges, its re-cut, the reductions the step needs, the public calls.
+ *
+ * Morton order: block coordinates (bi, bj, bk) of 21 bits each interleaved bit by bit
+ * (bk, bj, bi from the lowest bit up), so that a contiguous range of codes is a compact set of
+ * blocks and a rank's halo is a surface. The cuts: with the blocks' particle counts c_i in Morton
+ * order and N = sum c_i, rank r's range starts at the first block i whose preceding count
+ * sum_{j<i} c_j reaches floor(N r / P). */
+#include <string.h>
+
+#include "dist/dist_internal.h"
+#include "grid/grid.h"
+#include "transfer/kernel.h"
+#include "world/world.h"
+
+static uint64_t spread3(uint64_t x) {
+    x &= 0x1fffffULL;
+    x = (x | x << 32) & 0x1f00000000ffffULL;
+    x = (x | x << 16) & 0x1f0000ff0000ffULL;
+    x = (x | x << 8) & 0x100f00f00f00f00fULL;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+}
+
+static uint64_t spread2(uint64_t x) {
+    x &= 0x1fffffULL;
+    x = (x | x << 16) & 0x0000ffff0000ffffULL;
+    x = (x | x << 8) & 0x00ff00ff00ff00ffULL;
+    x = (x | x << 4) & 0x0f0f0f0f0f0f0f0fULL;
+    x = (x | x << 2) & 0x3333333333333333ULL;
+    x = (x | x << 1) & 0x5555555555555555ULL;
+    return x;
+}
+
+uint64_t sm_dist_morton(int dim, const int b[3]) {
+    if (dim == 2) return spread2((uint64_t)b[0]) << 1 | spread2((uint64_t)b[1]);
+    return spread3((uint64_t)b[0]) << 2 | spread3((uint64_t)b[1]) << 1 | spread3((uint64_t)b[2]);
+}
+
+void sm_dist_particle_block(const sm_dist *d, const double *x, int b[3]) {
+    b[0] = b[1] = b[2] = 0;
+    for (int a = 0; a < d->dim; a++) b[a] = sm_kernel_base(d->stencil, (x[a] - d->lo[a]) * d->inv_dx) >> SM_BLOCK_BITS;
+}
+
+int sm_dist_owner(const sm_dist *d, uint64_t m) {
+    int lo = 0, hi = d->size - 1; /* the largest r with cuts[r] <= m; cuts[0] = 0 */
+    while (lo < hi) {
+        const int mid = (lo + hi + 1) / 2;
+        if (d->cuts[mid] <= m) lo = mid;
+        else hi = mid - 1;
+    }
+    return lo;
+}
+
+int sm_dist_buf_reserve(sm_dist_buf *buf, size_t need) {
+    if (need <= buf->cap) return 1;
+    size_t cap = buf->cap ? buf->cap : 4096;
+    while (cap < need) cap += cap / 2;
+    unsigned char *q = sm_realloc(buf->data, cap);
+    if (!q) return 0;
+    buf->data = q;
+    buf->cap = cap;
+    return 1;
+}
+
+static int cmp_u64(const void *a, const void *b) {
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* (Morton code, particles) pairs of the blocks of particles [0, n), ascending code, into
+ * d->hist; returns the number of pairs, or -1 when out of memory. */
+static long block_histogram(sm_dist *d, const sm_particles *P, size_t n) {
+    if (d->hist_cap < 2 * n + 2) {
+        uint64_t *q = sm_realloc(d->hist, (2 * n + 2) * sizeof *q);
+        if (!q) return -1;
+        d->hist = q;
+        d->hist_cap = 2 * n + 2;
+    }
+    uint64_t *codes = d->hist + n; /* the upper half, read ahead of the pairs written below */
+    for (size_t i = 0; i < n; i++) {
+        int b[3];
+        sm_dist_particle_block(d, P->x + i * (size_t)d->dim, b);
+        codes[i] = sm_dist_morton(d->dim, b);
+    }
+    qsort(codes, n, sizeof *codes, cmp_u64);
+    long np = 0;
+    for (size_t i = 0; i < n;) {
+        size_t j = i;
+        while (j < n && codes[j] == codes[i]) j++;
+        const uint64_t code = codes[i], count = j - i;
+        d->hist[2 * np] = code; /* 2 np <= i: never past what was read */
+        d->hist[2 * np + 1] = count;
+        np++;
+        i = j;
+    }
+    return np;
+}
+
+static void cuts_from_histogram(sm_dist *d, const uint64_t *pairs, size_t np) {
+    uint64_t total = 0;
+    for (size_t i = 0; i < np; i++) total += pairs[2 * i + 1];
+    d->cuts[0] = 0;
+    size_t i = 0;
+    uint64_t before = 0;
+    for (int r = 1; r < d->size; r++) {
+        const uint64_t target = total * (uint64_t)r / (uint64_t)d->size;
+        while (i < np && before < target) before += pairs[2 * i++ + 1];
+        d->cuts[r] = i < np ? pairs[2 * i] : UINT64_MAX;
+    }
+}
+
+sm_status sm_dist_recut(sm_world *w) {
+    sm_dist *d = w->dist;
+    const long np = block_histogram(d, &w->p, d->owned);
+    int mine = np < 0 ? -1 : (int)np, bad = 0;
+    MPI_Allreduce(&(int){mine < 0}, &bad, 1, MPI_INT, MPI_MAX, d->comm);
+    if (bad) return sm_world_fail(w, SM_ERR_NOMEM, "distributed run: out of memory for the block histogram");
+    int *counts = d->counts, *displs = d->counts + d->size;
+    const int pairs2 = 2 * mine;
+    MPI_Allgather(&pairs2, 1, MPI_INT, counts, 1, MPI_INT, d->comm);
+    long total = 0;
+    for (int r = 0; r < d->size; r++) {
+        displs[r] = (int)total;
+        total += counts[r];
+    }
+    uint64_t *all = malloc((size_t)(total ? total : 1) * sizeof *all);
+    if (!all) return sm_world_fail(w, SM_ERR_NOMEM, "distributed run: out of memory for the block histogram");
+    MPI_Allgatherv(d->hist, pairs2, MPI_UINT64_T, all, counts, displs, MPI_UINT64_T, d->comm);
+    /* The ranks' blocks lie in their ranges, ranges in rank order: the concatenation is sorted. */
+    cuts_from_histogram(d, all, (size_t)total / 2);
+    free(all);
+    d->stats.rebalances++;
+    return SM_OK;
+}
+
+/* ---- Reductions and queries ---------------------------------------------------------------- */
+
+size_t sm_dist_owned(const sm_world *w) { return w->dist->owned; }
+
+double sm_dist_max(const sm_world *w, double v) {
+    double r = v;
+    MPI_Allreduce(&v, &r, 1, MPI_DOUBLE, MPI_MAX, w->dist->comm);
+    return r;
+}
+
+int sm_dist_max_int(const sm_world *w, int v) {
+    int r = v;
+    MPI_Allreduce(&v, &r, 1, MPI_INT, MPI_MAX, w->dist->comm);
+    return r;
+}
+
+int sm_dist_block_complete(const sm_world *w, uint64_t key) {
+    const sm_dist *d = w->dist;
+    int g[3];
+    sm_block_coords(key, g);
+    for (int c = 0; c < (1 << d->dim); c++) {
+        int b[3] = {g[0], g[1], g[2]};
+        for (int a = 0; a < d->dim; a++) b[a] -= (c >> a) & 1;
+        if (b[0] < 0 || b[1] < 0 || b[2] < 0) continue;
+        if (sm_dist_owner(d, sm_dist_morton(d->dim, b)) == d->rank) return 1;
+    }
+    return 0;
+}
+
+void sm_dist_adopt(sm_world *w, size_t first) {
+    sm_dist *d = w->dist;
+    sm_particles *P = &w->p;
+    size_t j = first;
+    for (size_t i = first; i < P->n; i++) {
+        int b[3];
+        sm_dist_particle_block(d, P->x + i * (size_t)d->dim, b);
+        if (sm_dist_owner(d, sm_dist_morton(d->dim, b)) != d->rank) continue;
+        if (j != i) sm_particles_move(P, d->dim, j, i);
+        j++;
+    }
+    P->n = j;
+    d->owned = j;
+}
+
+/* Every rank's particles gathered on rank 0, hashed in id order there, the hash sent to all. */
+uint64_t sm_dist_id_hash(const sm_world *w) {
+    const sm_dist *d = w->dist;
+    const size_t ps = sm_particles_packed_size(d->dim);
+    const int n = (int)d->owned;
+    unsigned char *mine = malloc((size_t)(n ? n : 1) * ps);
+    int *counts = malloc(2 * (size_t)d->size * sizeof *counts);
+    uint64_t h = 0;
+    int ok = mine && counts, all_ok = 0;
+    MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
+    if (all_ok) {
+        for (int i = 0; i < n; i++) sm_particles_pack(&w->p, d->dim, (size_t)i, mine + (size_t)i * ps);
+        const int bytes = (int)((size_t)n * ps);
+        MPI_Gather(&bytes, 1, MPI_INT, counts, 1, MPI_INT, 0, d->comm);
+        long total = 0;
+        if (d->rank == 0)
+            for (int r = 0; r < d->size; r++) {
+                counts[d->size + r] = (int)total;
+                total += counts[r];
+            }
+        unsigned char *all = d->rank == 0 ? malloc((size_t)(total ? total : 1)) : NULL;
+        MPI_Gatherv(mine, bytes, MPI_BYTE, all, counts, counts + d->size, MPI_BYTE, 0, d->comm);
+        if (d->rank == 0 && all) {
+            sm_particles P;
+            memset(&P, 0, sizeof P);
+            const size_t np = (size_t)total / ps;
+            if (sm_particles_reserve(&P, d->dim, np) == SM_OK) {
+                for (size_t i = 0; i < np; i++) sm_particles_unpack(&P, d->dim, i, all + i * ps);
+                P.n = np;
+                h = sm_particles_hash_by_id(&P, d->dim);
+            }
+            sm_particles_free(&P);
+        }
+        free(all);
+        MPI_Bcast(&h, 1, MPI_UINT64_T, 0, d->comm);
+    }
+    free(mine);
+    free(counts);
+    return h;
+}
+
+/* ---- Creation and the public calls ---------------------------------------------------------- */
+
+void sm_dist_free(sm_dist *d) {
+    if (!d) return;
+    for (int r = 0; r < d->size; r++) {
+        if (d->own_out) free(d->own_out[r].data);
+        if (d->ghost_out) free(d->ghost_out[r].data);
+    }
+    free(d->own_out);
+    free(d->ghost_out);
+    free(d->in.data);
+    free(d->counts);
+    free(d->req);
+    free(d->cuts);
+    free(d->hist);
+    free(d->scratch);
+    MPI_Comm_free(&d->comm);
+    free(d);
+}
+
+static sm_dist *dist_create(const sm_world *w, MPI_Comm comm) {
+    sm_dist *d = calloc(1, sizeof *d);
+    if (!d) return NULL;
+    MPI_Comm_dup(comm, &d->comm);
+    MPI_Comm_rank(d->comm, &d->rank);
+    MPI_Comm_size(d->comm, &d->size);
+    d->dim = w->dim;
+    d->stencil = w->def.kernel == SM_KERNEL_CUBIC ? 4 : 3;
+    for (int a = 0; a < 3; a++) d->lo[a] = w->def.domain_min[a];
+    d->inv_dx = w->inv_dx;
+    const size_t P = (size_t)d->size;
+    d->cuts = calloc(P, sizeof *d->cuts);
+    d->own_out = calloc(P, sizeof *d->own_out);
+    d->ghost_out = calloc(P, sizeof *d->ghost_out);
+    d->counts = calloc(4 * P, sizeof *d->counts);
+    d->req = calloc(2 * P, sizeof *d->req);
+    if (!d->cuts || !d->own_out || !d->ghost_out || !d->counts || !d->req) {
+        sm_dist_free(d);
+        return NULL;
+    }
+    d->stats.rank = d->rank;
+    d->stats.ranks = d->size;
+    return d;
+}
+
+sm_status sm_world_distribute(sm_world *w, MPI_Comm comm) {
+    if (w->dist) return sm_world_fail(w, SM_ERR_INVALID, "sm_world_distribute: the world is distributed already");
+    if (w->def.integrator == SM_INTEGRATOR_IMPLICIT)
+        return sm_world_fail(w, SM_ERR_INVALID,
+                             "sm_world_distribute: the implicit integrator does not run across ranks yet (issue 19)");
+    uint64_t h[2] = {sm_world_state_hash(w), (uint64_t)w->p.n}, lo[2], hi[2];
+    MPI_Allreduce(h, lo, 2, MPI_UINT64_T, MPI_MIN, comm);
+    MPI_Allreduce(h, hi, 2, MPI_UINT64_T, MPI_MAX, comm);
+    if (lo[0] != hi[0] || lo[1] != hi[1])
+        return sm_world_fail(w, SM_ERR_INVALID,
+                             "sm_world_distribute: the ranks' worlds differ (%llu to %llu particles, different states): "
+                             "every rank must build the same world",
+                             (unsigned long long)lo[1], (unsigned long long)hi[1]);
+    sm_dist *d = dist_create(w, comm);
+    if (!d) return sm_world_fail(w, SM_ERR_NOMEM, "sm_world_distribute: out of memory");
+    /* Every rank holds every particle: the same histogram everywhere, no communication. */
+    d->owned = w->p.n;
+    const long np = block_histogram(d, &w->p, w->p.n);
+    if (np < 0) {
+        sm_dist_free(d);
+        return sm_world_fail(w, SM_ERR_NOMEM, "sm_world_distribute: out of memory");
+    }
+    cuts_from_histogram(d, d->hist, (size_t)np);
+    w->dist = d;
+    sm_dist_adopt(w, 0);
+    w->bins.keep_storage = 1;
+    w->dirty = 1;
+    return SM_OK;
+}
+
+int sm_world_dist_stats(const sm_world *w, sm_dist_stats *out) {
+    memset(out, 0, sizeof *out);
+    if (!w->dist) return 0;
+    *out = w->dist->stats;
+    out->particles = w->dist->owned;
+    return 1;
+}

@@ -1,0 +1,64 @@
+/* The distributed world (sandmpm_mpi.h): what the step driver and the particle API call. Built
+ * with MPI (SM_HAVE_MPI); without it w->dist is always NULL and these are no-ops.
+ *
+ * The decomposition (dist.c): particle blocks (grid/bin.h) in Morton order of their block
+ * coordinates, cut into one contiguous range per rank (cuts[r] <= morton < cuts[r + 1]) of about
+ * equal particle counts; re-cut when the largest rank holds more than SM_DIST_IMBALANCE times the
+ * mean.
+ *
+ * One exchange per step (exchange.c), before binning: each particle goes to the owner of its
+ * block (migration, every field), and a copy to the owner of every block within one block of it
+ * (ghosts). A rank then holds its particles, [0, owned), and every particle of the blocks next to
+ * them, [owned, n). A grid block's P2G sums come from the particle blocks b - {0,1}^d, and G2P of
+ * particle block b reads grid blocks b + {0,1}^d: with the ghosts, every grid block that an owned
+ * particle reads is complete on its rank, summed in the same colour order as on one rank, with a
+ * block's particles in ascending id (bin_dim.c). So the grid velocities an owned particle reads
+ * are bitwise those of a one-rank run, and G2P and plasticity run on owned blocks only. At the
+ * end of the step the ghosts are dropped. Grid blocks at the outer edge of the ghost layer are
+ * incomplete; nothing reads them (the grid health check skips them). */
+#ifndef SM_DIST_H
+#define SM_DIST_H
+
+#include "core/common.h"
+#include "core/step_ctx.h"
+
+struct sm_world;
+typedef struct sm_dist sm_dist;
+
+/* The largest rank's particles over the mean that triggers a re-cut, and the fewest steps between
+ * two re-cuts (a cut is only as fine as a block: when blocks are few, no cut reaches the
+ * threshold, and re-cutting every step would only cost time). */
+#define SM_DIST_IMBALANCE 1.10
+#define SM_DIST_RECUT_STEPS 25
+
+#if SM_HAVE_MPI
+/* Migration, re-balancing and ghosts (collective). */
+sm_status sm_dist_exchange(struct sm_world *w, const sm_step_ctx *c);
+/* Drops the ghosts; reorders this rank's particles by block when they are scattered. */
+void sm_dist_end_step(struct sm_world *w);
+/* Keeps, of particles [first, n) (added on every rank alike), those in this rank's blocks. */
+void sm_dist_adopt(struct sm_world *w, size_t first);
+/* This rank's particles: [0, owned) of the storage. */
+size_t sm_dist_owned(const struct sm_world *w);
+/* The largest v over the ranks (collective). */
+double sm_dist_max(const struct sm_world *w, double v);
+/* The largest of an int over the ranks (collective). */
+int sm_dist_max_int(const struct sm_world *w, int v);
+/* Whether grid block `key` is read by this rank's particles (complete). */
+int sm_dist_block_complete(const struct sm_world *w, uint64_t key);
+/* sm_world_id_hash of a distributed world (collective). */
+uint64_t sm_dist_id_hash(const struct sm_world *w);
+void sm_dist_free(sm_dist *d);
+#else
+static inline sm_status sm_dist_exchange(struct sm_world *w, const sm_step_ctx *c) { (void)w; (void)c; return SM_OK; }
+static inline void sm_dist_end_step(struct sm_world *w) { (void)w; }
+static inline void sm_dist_adopt(struct sm_world *w, size_t first) { (void)w; (void)first; }
+static inline size_t sm_dist_owned(const struct sm_world *w) { (void)w; return 0; }
+static inline double sm_dist_max(const struct sm_world *w, double v) { (void)w; return v; }
+static inline int sm_dist_max_int(const struct sm_world *w, int v) { (void)w; return v; }
+static inline int sm_dist_block_complete(const struct sm_world *w, uint64_t key) { (void)w; (void)key; return 1; }
+static inline uint64_t sm_dist_id_hash(const struct sm_world *w) { (void)w; return 0; }
+static inline void sm_dist_free(sm_dist *d) { (void)d; }
+#endif
+
+#endif

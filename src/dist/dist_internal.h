@@ -1,0 +1,48 @@
+/* The distributed world's state, shared by dist.c (decomposition, reductions, the public calls)
+ * and exchange.c (migration and ghosts). */
+#ifndef SM_DIST_INTERNAL_H
+#define SM_DIST_INTERNAL_H
+
+#include <mpi.h>
+
+#include "dist/dist.h"
+#include "sandmpm/sandmpm_mpi.h"
+
+/* A growing byte buffer: packed particles (particles.h's sm_particles_pack) for one rank. */
+typedef struct sm_dist_buf {
+    unsigned char *data;
+    size_t len, cap; /* bytes used, bytes allocated */
+} sm_dist_buf;
+
+struct sm_dist {
+    MPI_Comm comm;
+    int rank, size;
+    int dim, stencil;         /* the world's dimension and kernel support (3 or 4 nodes) */
+    double lo[3], inv_dx;     /* the domain's lower corner and 1/dx, as the binner uses them */
+    uint64_t *cuts;           /* size entries: rank r owns Morton codes [cuts[r], cuts[r + 1]) */
+    size_t owned;             /* this rank's particles: [0, owned) of the storage */
+    sm_dist_buf *own_out;     /* per rank: particles migrating to it */
+    sm_dist_buf *ghost_out;   /* per rank: ghost copies for it (this rank's own ghosts too) */
+    sm_dist_buf in;           /* received particles, rank after rank */
+    int *counts;              /* 2 per rank sent (migrating, ghosts), then 2 per rank received */
+    MPI_Request *req;         /* 2 per rank */
+    uint64_t *hist;           /* (Morton code, particles) pairs of the blocks, for a re-cut */
+    size_t hist_cap;
+    uint32_t *scratch;        /* the owned particles' order for a reorder */
+    size_t scratch_cap;
+    int since_recut;          /* steps since the last cut */
+    sm_dist_stats stats;
+};
+
+/* Morton code of block coordinates (21 bits each; z ignored in 2D). */
+uint64_t sm_dist_morton(int dim, const int b[3]);
+/* The block coordinates of the particle at x (the binner's particle block). */
+void sm_dist_particle_block(const sm_dist *d, const double *x, int b[3]);
+/* The rank owning Morton code m. */
+int sm_dist_owner(const sm_dist *d, uint64_t m);
+/* Grows buf to hold `need` bytes; 0 when out of memory. */
+int sm_dist_buf_reserve(sm_dist_buf *buf, size_t need);
+/* Re-cuts the blocks by the particles every rank holds in [0, owned) (collective). */
+sm_status sm_dist_recut(struct sm_world *w);
+
+#endif

@@ -1,0 +1,198 @@
+/* The exchange of a distributed step (dist.h): migration, re-balancing and ghosts, before the
+ * binning; and the end of the step, which drops the ghosts.
+ *
+ *   1. imbalance: the ranks' particle counts; a re-cut when max > SM_DIST_IMBALANCE x mean (at
+ *      most every SM_DIST_RECUT_STEPS steps);
+ *   2. route: for each particle, the owner o of its block and the owners G of the 3^d blocks
+ *      around it (less o). It goes to o (stays if o is this rank), and a copy to every rank of G
+ *      (this rank's own copy becomes a local ghost); the kept particles are compacted in place;
+ *   3. send: counts to every rank (MPI_Alltoall), then one message per peer holding its
+ *      migrating particles, then its ghosts (sm_particles_pack, every field);
+ *   4. receive, in rank order: migrating particles appended to [0, owned), then the ghosts.
+ * Storage order does not matter to the results (a block's particles are summed in id order). */
+#include <string.h>
+
+#include "dist/dist_internal.h"
+#include "grid/grid.h"
+#include "world/world.h"
+
+static int append(sm_dist_buf *buf, const sm_particles *P, int dim, size_t i, size_t ps) {
+    if (!sm_dist_buf_reserve(buf, buf->len + ps)) return 0;
+    sm_particles_pack(P, dim, i, buf->data + buf->len);
+    buf->len += ps;
+    return 1;
+}
+
+/* The owners of the 3^d blocks around block b other than `skip`, distinct, into dst; returns
+ * their number. */
+static int neighbour_owners(const sm_dist *d, const int b[3], int skip, int *dst) {
+    int n = 0;
+    const int m = d->dim == 3 ? 27 : 9;
+    for (int k = 0; k < m; k++) {
+        int o[3] = {b[0] + k % 3 - 1, b[1] + (k / 3) % 3 - 1, d->dim == 3 ? b[2] + k / 9 - 1 : 0};
+        if (o[0] < 0 || o[1] < 0 || o[2] < 0 || o[0] > SM_KEY_MAX || o[1] > SM_KEY_MAX || o[2] > SM_KEY_MAX) continue;
+        const int r = sm_dist_owner(d, sm_dist_morton(d->dim, o));
+        if (r == skip) continue;
+        int seen = 0;
+        for (int j = 0; j < n; j++) seen |= dst[j] == r;
+        if (!seen) dst[n++] = r;
+    }
+    return n;
+}
+
+/* 1. Re-cut when the largest rank holds too many particles. */
+static sm_status balance(sm_world *w) {
+    sm_dist *d = w->dist;
+    const double mine = (double)d->owned;
+    double mx = 0, sum = 0;
+    MPI_Allreduce(&mine, &mx, 1, MPI_DOUBLE, MPI_MAX, d->comm);
+    MPI_Allreduce(&mine, &sum, 1, MPI_DOUBLE, MPI_SUM, d->comm);
+    const double mean = sum / d->size;
+    d->stats.max_particles = (size_t)mx;
+    d->stats.mean_particles = mean;
+    if (++d->since_recut < SM_DIST_RECUT_STEPS || !(mx > SM_DIST_IMBALANCE * mean && mx > 1)) return SM_OK;
+    d->since_recut = 0;
+    return sm_dist_recut(w);
+}
+
+/* 2. Routes every particle; returns 0 when out of memory. */
+static int route(sm_dist *d, sm_particles *P) {
+    const size_t ps = sm_particles_packed_size(d->dim);
+    for (int r = 0; r < d->size; r++) d->own_out[r].len = d->ghost_out[r].len = 0;
+    int last[3] = {-1, -1, -1}, owner = d->rank, ng = 0, ok = 1;
+    int ghosts[27];
+    size_t kept = 0;
+    for (size_t i = 0; i < P->n; i++) {
+        int b[3];
+        sm_dist_particle_block(d, P->x + i * (size_t)d->dim, b);
+        if (b[0] != last[0] || b[1] != last[1] || b[2] != last[2]) {
+            memcpy(last, b, sizeof last);
+            owner = sm_dist_owner(d, sm_dist_morton(d->dim, b));
+            ng = neighbour_owners(d, b, owner, ghosts);
+        }
+        for (int j = 0; j < ng; j++) ok &= append(&d->ghost_out[ghosts[j]], P, d->dim, i, ps);
+        if (owner != d->rank) {
+            ok &= append(&d->own_out[owner], P, d->dim, i, ps);
+            d->stats.migrated_sent++;
+            continue;
+        }
+        if (kept != i) sm_particles_move(P, d->dim, kept, i);
+        kept++;
+    }
+    P->n = kept;
+    return ok;
+}
+
+/* 3-4. Sends the buffers, receives into d->in (rank after rank: migrating, then ghosts). */
+static int send_receive(sm_dist *d, size_t ps) {
+    const int P = d->size;
+    int *sent = d->counts, *recv = d->counts + 2 * P;
+    for (int r = 0; r < P; r++) {
+        sent[2 * r] = r == d->rank ? 0 : (int)(d->own_out[r].len / ps);
+        sent[2 * r + 1] = r == d->rank ? 0 : (int)(d->ghost_out[r].len / ps);
+    }
+    MPI_Alltoall(sent, 2, MPI_INT, recv, 2, MPI_INT, d->comm);
+    size_t total = 0;
+    for (int r = 0; r < P; r++) total += (size_t)(recv[2 * r] + recv[2 * r + 1]) * ps;
+    int ok = sm_dist_buf_reserve(&d->in, total + 1), all_ok = 0;
+    MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
+    if (!all_ok) return 0;
+    int nreq = 0;
+    size_t at = 0;
+    for (int r = 0; r < P; r++) {
+        const size_t bytes = (size_t)(recv[2 * r] + recv[2 * r + 1]) * ps;
+        if (bytes) MPI_Irecv(d->in.data + at, (int)bytes, MPI_BYTE, r, 19, d->comm, &d->req[nreq++]);
+        at += bytes;
+    }
+    d->in.len = at;
+    d->stats.bytes_sent = d->stats.messages_sent = 0;
+    for (int r = 0; r < P; r++) {
+        if (r == d->rank || !(sent[2 * r] + sent[2 * r + 1])) continue;
+        /* Migrating then ghosts in one message: the ghosts appended to the migrating buffer. */
+        sm_dist_buf *o = &d->own_out[r];
+        if (!sm_dist_buf_reserve(o, o->len + d->ghost_out[r].len)) return 0;
+        memcpy(o->data + o->len, d->ghost_out[r].data, d->ghost_out[r].len);
+        o->len += d->ghost_out[r].len;
+        MPI_Isend(o->data, (int)o->len, MPI_BYTE, r, 19, d->comm, &d->req[nreq++]);
+        d->stats.bytes_sent += o->len;
+        d->stats.messages_sent++;
+        d->stats.ghosts_sent += (size_t)sent[2 * r + 1];
+    }
+    MPI_Waitall(nreq, d->req, MPI_STATUSES_IGNORE);
+    return 1;
+}
+
+static void unpack_run(sm_particles *P, int dim, const unsigned char *src, size_t count, size_t ps) {
+    for (size_t i = 0; i < count; i++) sm_particles_unpack(P, dim, P->n + i, src + i * ps);
+    P->n += count;
+}
+
+/* 4. This rank's particles, the arrivals, then the ghosts (its own copies first). */
+static sm_status place(sm_world *w, size_t ps) {
+    sm_dist *d = w->dist;
+    sm_particles *P = &w->p;
+    const int *recv = d->counts + 2 * d->size;
+    size_t arrive = 0, ghosts = d->ghost_out[d->rank].len / ps;
+    for (int r = 0; r < d->size; r++) {
+        arrive += (size_t)recv[2 * r];
+        ghosts += (size_t)recv[2 * r + 1];
+    }
+    if (sm_particles_reserve(P, d->dim, P->n + arrive + ghosts) != SM_OK ||
+        sm_bins_reserve_perm(&w->bins, P->cap) != SM_OK)
+        return SM_ERR_NOMEM;
+    size_t at = 0;
+    for (int r = 0; r < d->size; r++) {
+        unpack_run(P, d->dim, d->in.data + at, (size_t)recv[2 * r], ps);
+        at += (size_t)(recv[2 * r] + recv[2 * r + 1]) * ps;
+    }
+    d->owned = P->n;
+    unpack_run(P, d->dim, d->ghost_out[d->rank].data, d->ghost_out[d->rank].len / ps, ps);
+    at = 0;
+    for (int r = 0; r < d->size; r++) {
+        at += (size_t)recv[2 * r] * ps;
+        unpack_run(P, d->dim, d->in.data + at, (size_t)recv[2 * r + 1], ps);
+        at += (size_t)recv[2 * r + 1] * ps;
+    }
+    return SM_OK;
+}
+
+sm_status sm_dist_exchange(sm_world *w, const sm_step_ctx *c) {
+    (void)c;
+    sm_dist *d = w->dist;
+    const size_t ps = sm_particles_packed_size(d->dim);
+    d->stats.ghosts_sent = d->stats.migrated_sent = 0;
+    if (balance(w) != SM_OK) return SM_ERR_NOMEM;
+    int ok = route(d, &w->p), all_ok = 0;
+    MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
+    if (!all_ok || !send_receive(d, ps) || place(w, ps) != SM_OK)
+        return sm_world_fail(w, SM_ERR_NOMEM, "step %llu: out of memory for the particles exchanged between ranks",
+                             (unsigned long long)w->steps + 1);
+    return SM_OK;
+}
+
+/* The owned particles in block order (perm of the binning, ghosts left out); reordered when a
+ * block's particles are scattered (as the binner does for one rank). */
+void sm_dist_end_step(sm_world *w) {
+    sm_dist *d = w->dist;
+    sm_particles *P = &w->p;
+    const size_t n = P->n, own = d->owned;
+    P->n = own;
+    if (own == 0 || n > w->bins.perm_cap) return;
+    if (d->scratch_cap < own) {
+        uint32_t *q = sm_realloc(d->scratch, own * sizeof *q);
+        if (!q) return; /* no reorder: slower, not wrong */
+        d->scratch = q;
+        d->scratch_cap = own;
+    }
+    size_t k = 0, breaks = 0;
+    for (size_t i = 0; i < n; i++) {
+        const uint32_t p = w->bins.perm[i];
+        if (p >= own) continue;
+        breaks += k > 0 && p != d->scratch[k - 1] + 1;
+        d->scratch[k++] = p;
+    }
+    if (k == own && breaks * 16 > own) {
+        sm_particles_permute(P, d->dim, d->scratch);
+        w->bins.reorders++;
+    }
+}

@@ -1,0 +1,184 @@
+/* Distributed runs (issue 19, sandmpm_mpi.h), run by CTest under mpirun on 1, 2, 3 and 4 ranks:
+ *  - the explicit step on N ranks gives bitwise the particle state of one rank (sm_world_id_hash,
+ *    particles in id order), computed here by rank 0 with 2 threads while the ranks run 1 thread
+ *    each: 2D and 3D collapses of a sand block hit by a moving sphere, with a ball thrown across
+ *    the domain and an emitter pouring sand on top, at the adaptive dt (a max over the ranks);
+ *  - mass is conserved across migration: the ranks' particles add up to the seeded plus the
+ *    emitted ones every frame, and their masses to the seeded plus the emitted mass;
+ *  - the thrown ball's first particle crosses rank boundaries (its owner changes at least once on
+ *    2 and 3 ranks, at least twice on 4); every rank holds particles at the start (the cuts balance them);
+ *  - the state does change (the hash after the run differs from the start's). */
+#include "test_util.h"
+#include "sandmpm/sandmpm_mpi.h"
+
+#include <string.h>
+
+#define FRAMES 12
+#define FRAME_DT (1.0 / 120)
+
+static int rank, ranks;
+
+static sm_world *build(int dim, int threads, size_t *ball_id) {
+    sm_world_def def = sm_world_def_default();
+    def.dim = dim;
+    def.dx = dim == 2 ? 0.01 : 0.04;
+    def.threads = threads;
+    sm_world *w = NULL;
+    char err[256];
+    if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) return NULL;
+    sm_material_def m = sm_material_def_sand();
+    int sand = -1, ball = -1;
+    CHECK(sm_world_add_material(w, &m, &sand) == SM_OK);
+    sm_material_def e = sm_material_def_elastic();
+    CHECK(sm_world_add_material(w, &e, &ball) == SM_OK);
+    sm_collider_def g = sm_collider_def_default();
+    g.shape_count = 1;
+    g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
+    g.shapes[0].center[1] = 0.1;
+    g.shapes[0].normal[1] = 1;
+    g.mode = SM_COLLIDE_SLIP;
+    g.friction = 0.4;
+    CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
+    sm_collider_def s = sm_collider_def_default();
+    s.shape_count = 1;
+    s.shapes[0] = sm_shape_default(SM_SHAPE_SPHERE);
+    s.shapes[0].center[0] = 0.75;
+    s.shapes[0].center[1] = 0.22;
+    s.shapes[0].center[2] = 0.5;
+    s.shapes[0].radius = 0.08;
+    s.velocity[0] = -1.5;
+    s.mode = SM_COLLIDE_SEPARATE;
+    s.friction = 0.2;
+    CHECK(sm_world_add_collider(w, &s, NULL) == SM_OK);
+    sm_shape box = sm_shape_default(SM_SHAPE_BOX);
+    box.center[0] = 0.45;
+    box.center[1] = 0.28;
+    box.center[2] = 0.5;
+    box.half_extent[0] = box.half_extent[1] = box.half_extent[2] = 0.16;
+    sm_seed_def sd = sm_seed_def_default();
+    sd.material = sand;
+    sd.ppc = dim == 2 ? 4 : 8;
+    CHECK(sm_world_seed_shape(w, &box, &sd, NULL) == SM_OK);
+    sm_particles_view pv;
+    sm_world_particles(w, &pv);
+    *ball_id = pv.n; /* ids are 0, 1, ... in order of insertion */
+    sm_shape sph = sm_shape_default(SM_SHAPE_SPHERE);
+    sph.center[0] = 0.12;
+    sph.center[1] = 0.52;
+    sph.center[2] = 0.5;
+    sph.radius = 0.05;
+    sd.material = ball;
+    sd.velocity[0] = 7;
+    sd.velocity[1] = -1;
+    sd.method = SM_SEED_POISSON;
+    CHECK(sm_world_seed_shape(w, &sph, &sd, NULL) == SM_OK);
+    sm_emitter_def em = sm_emitter_def_default();
+    em.shape = sm_shape_default(SM_SHAPE_SPHERE);
+    em.shape.center[0] = 0.5;
+    em.shape.center[1] = 0.85;
+    em.shape.center[2] = 0.5;
+    em.shape.radius = 0.04;
+    em.material = sand;
+    em.ppc = sd.ppc;
+    em.velocity[1] = -2;
+    em.rate = dim == 2 ? 20 : 200;
+    em.stop = 1;
+    CHECK(sm_world_add_emitter(w, &em, NULL) == SM_OK);
+    return w;
+}
+
+/* This rank's particle count and mass, summed over the ranks. */
+static void totals(const sm_world *w, double *count, double *mass) {
+    sm_particles_view pv;
+    sm_world_particles(w, &pv);
+    double mine[2] = {(double)pv.n, 0}, all[2];
+    for (size_t i = 0; i < pv.n; i++) mine[1] += sm_world_particle_mass(w, i);
+    MPI_Allreduce(mine, all, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    *count = all[0];
+    *mass = all[1];
+}
+
+/* The rank holding particle `id`, or -1. */
+static int holder(const sm_world *w, size_t id) {
+    sm_particles_view pv;
+    sm_world_particles(w, &pv);
+    int mine = -1, all = -1;
+    for (size_t i = 0; i < pv.n; i++)
+        if (pv.id[i] == id) mine = rank;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    return all;
+}
+
+static void run(int dim) {
+    size_t ball_id = 0;
+    /* One rank, two threads: the reference. */
+    uint64_t ref[1] = {0};
+    if (rank == 0) {
+        sm_world *w = build(dim, 2, &ball_id);
+        CHECK(w != NULL);
+        for (int f = 1; f <= FRAMES && w; f++) CHECK(sm_world_advance(w, f * FRAME_DT) == SM_OK);
+        ref[0] = sm_world_id_hash(w);
+        sm_world_destroy(w);
+    }
+    MPI_Bcast(ref, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+
+    sm_world *w = build(dim, 1, &ball_id);
+    CHECK(w != NULL);
+    if (!w) return;
+    const uint64_t h_start = sm_world_id_hash(w);
+    double n0, m0;
+    totals(w, &n0, &m0); /* every rank holds every particle before sm_world_distribute */
+    n0 /= ranks;
+    m0 /= ranks;
+    CHECK(sm_world_distribute(w, MPI_COMM_WORLD) == SM_OK);
+    sm_particles_view pv;
+    sm_world_particles(w, &pv);
+    int empty = pv.n == 0, any_empty = 0;
+    MPI_Allreduce(&empty, &any_empty, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    CHECK(!any_empty);
+    int owner = holder(w, ball_id), changes = 0;
+    CHECK(owner >= 0);
+    for (int f = 1; f <= FRAMES; f++) {
+        const sm_status st = sm_world_advance(w, f * FRAME_DT);
+        CHECK(st == SM_OK);
+        if (st != SM_OK) {
+            fprintf(stderr, "rank %d: %s\n", rank, sm_world_errmsg(w));
+            break;
+        }
+        double n, m;
+        totals(w, &n, &m);
+        const double emitted = sm_world_emitted_mass(w, 0);
+        CHECK(n > n0);
+        CHECK_NEAR(m, m0 + emitted, (sm_real_is_double() ? 1e-12 : 1e-6) * (m0 + emitted)); /* particle masses in sm_real */
+        const int now = holder(w, ball_id);
+        CHECK(now >= 0);
+        changes += now != owner;
+        owner = now;
+    }
+    const uint64_t h = sm_world_id_hash(w);
+    sm_dist_stats ds;
+    CHECK(sm_world_dist_stats(w, &ds) == 1);
+    CHECK(ds.ranks == ranks && ds.rank == rank);
+    if (rank == 0)
+        printf("%dD on %d ranks: id hash %016llx (one rank, 2 threads: %016llx), the ball's owner changed %d times, "
+               "rank 0: %zu particles, %zu ghosts and %zu migrating sent in the last step (%zu bytes, %zu messages), "
+               "%llu cuts\n",
+               dim, ranks, (unsigned long long)h, (unsigned long long)ref[0], changes, ds.particles, ds.ghosts_sent,
+               ds.migrated_sent, ds.bytes_sent, ds.messages_sent, (unsigned long long)ds.rebalances);
+    CHECK(h == ref[0]);
+    CHECK(h != h_start);
+    if (ranks >= 2) CHECK(changes >= (ranks >= 4 ? 2 : 1)); /* several boundaries on 4 ranks */
+    sm_world_destroy(w);
+}
+
+int main(int argc, char **argv) {
+    MPI_Init(&argc, &argv);
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    run(2);
+    run(3);
+    int mine = sm_test_failures, all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    MPI_Finalize();
+    return all ? 1 : 0;
+}

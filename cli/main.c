@@ -12,6 +12,7 @@
  * memory. The commands are in cli/cmd_*.c. */
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli/cli.h"
@@ -98,7 +99,23 @@ static int dispatch(int argc, char **argv) {
 
 /* What went to stdout (info, bench's table, help) is checked too: a full disk or a closed pipe is
  * an I/O failure, not success. */
+/* Started as one of several MPI ranks (mpirun -np N, N > 1; OpenMPI's or PMI's variables): the
+ * program does not run across ranks yet (the library does: sandmpm_mpi.h), and N copies of one
+ * run would write one output folder at once. */
+static int launched_ranks(void) {
+    const char *v = getenv("OMPI_COMM_WORLD_SIZE");
+    if (!v) v = getenv("PMI_SIZE");
+    return v ? atoi(v) : 1;
+}
+
 int main(int argc, char **argv) {
+    const int ranks = launched_ranks();
+    if (ranks > 1) {
+        fprintf(stderr, "sandmpm: started as %d MPI ranks, but the program runs on one process (distributed runs are "
+                        "in the library so far: include/sandmpm/sandmpm_mpi.h, issue 19); run it without mpirun\n",
+                ranks);
+        return cli_exit_code(SM_ERR_INVALID);
+    }
     int code = dispatch(argc, argv);
     if (fflush(stdout) != 0 || ferror(stdout)) {
         fprintf(stderr, "sandmpm: writing to the standard output failed: %s\n", strerror(errno));

@@ -99,7 +99,14 @@ static void preconditioner(int dim) {
     uint64_t allocs = 0;
     for (int s = 0; s < 10; s++) {
         const uint64_t a0 = sm_allocation_count();
-        for (int k = 0; k < 2; k++) CHECK(sm_world_step(w[k], dt) == SM_OK);
+        for (int k = 0; k < 2; k++) {
+            const sm_status st = sm_world_step(w[k], dt);
+            if (st != SM_OK) printf("%dD step %d, preconditioner %d: %s\n", dim, s + 1, k, sm_world_errmsg(w[k]));
+            /* In float, block Jacobi's Newton can stall just above the tolerance (2D: 1.13e-3 against
+             * 1e-3 m/s^2 at step 8): the step is refused and the world stays intact (what
+             * sm_world_advance retries at half the dt); in double both always converge. */
+            CHECK(st == SM_OK || (!sm_real_is_double() && sm_world_step_refused(w[k])));
+        }
         if (s > 0) allocs += sm_allocation_count() - a0; /* the first step at this dt may grow workspaces */
         if (s == 0)
             for (size_t i = 0; i < w[0]->p.n * (size_t)dim; i++)

@@ -21,6 +21,7 @@
 typedef struct sm_pblock {
     uint64_t key;
     uint32_t start, end;    /* positions in perm */
+    uint32_t ascending;     /* 1: perm[start..end) increases (storage order is id order here) */
     uint32_t gslot[8];
 } sm_pblock;
 

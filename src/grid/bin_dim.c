@@ -190,13 +190,15 @@ static void publish_blocks(sm_bins *b, size_t nne, int T) {
 
 /* 3d. Each block's stretch of perm in ascending particle id. Storage order is mostly block order
  * already, so a block's particles are a few runs sorted by id (the previous block order): an
- * insertion sort costs about one comparison per particle. */
+ * insertion sort costs about one comparison per particle. A block the sort did not change keeps
+ * the scatter's increasing indices (`ascending`: the transfers' cheap test for a run). */
 static void order_by_id(sm_bins *b, const uint32_t *id, int T) {
     uint32_t *perm = b->perm;
     const long nb = (long)b->npb;
 #pragma omp parallel for schedule(static) num_threads(T)
     for (long r = 0; r < nb; r++) {
         const uint32_t s = b->pb[r].start, e = b->pb[r].end;
+        uint32_t moved = 0;
         for (uint32_t i = s + 1; i < e; i++) {
             const uint32_t p = perm[i], key = id[p];
             uint32_t j = i;
@@ -205,7 +207,9 @@ static void order_by_id(sm_bins *b, const uint32_t *id, int T) {
                 j--;
             }
             perm[j] = p;
+            moved |= j != i;
         }
+        b->pb[r].ascending = !moved; /* the scatter's order increases; any move breaks it */
     }
 }
 

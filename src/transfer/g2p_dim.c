@@ -197,7 +197,7 @@ static inline __attribute__((always_inline)) void g2p_block(const sm_g2p_io *io,
     wchunk wc;
     for (uint32_t idx = pb->start; idx < pb->end; idx++) {
         const int j = (int)((idx - pb->start) % WCH);
-        if (j == 0) chunk_weights(S, io->x, io->n, 0, perm, idx, (int)(pb->end - idx), c, bc, &wc);
+        if (j == 0) chunk_weights(S, io->x, io->n, 0, (int)pb->ascending, perm, idx, (int)(pb->end - idx), c, bc, &wc);
         weights W;
         chunk_get(&wc, j, &W);
         vec Sum, E[D];

@@ -122,7 +122,7 @@ static inline __attribute__((always_inline)) void p2g_block(const sm_p2g_io *io,
     for (uint32_t idx = pb->start; idx < pb->end; idx++) {
         const size_t p = bins->perm[idx];
         const int j = (int)((idx - pb->start) % WCH);
-        if (j == 0) chunk_weights(S, io->x, io->n, 1, bins->perm, idx, (int)(pb->end - idx), c, bc, &wc);
+        if (j == 0) chunk_weights(S, io->x, io->n, 1, (int)pb->ascending, bins->perm, idx, (int)(pb->end - idx), c, bc, &wc);
         weights W;
         chunk_get(&wc, j, &W);
         vec A, Ce[D], Ve[D];

@@ -54,19 +54,29 @@ typedef struct wchunk {
 } wchunk;
 
 static inline __attribute__((always_inline)) void chunk_weights(int S, const double *restrict x, size_t n, int overread,
-                                                                const uint32_t *restrict perm, uint32_t i0, int cnt,
+                                                                int ascending, const uint32_t *restrict perm,
+                                                                uint32_t i0, int cnt,
                                                                 const sm_step_ctx *c, const int bc[3],
                                                                 wchunk *restrict wc) {
     /* Positions: read in place when the chunk's particles are consecutive in storage (the usual
      * case: storage is mostly in block order, and a block's particles in ascending id) and WCH of
      * them exist from the first; else copied (lanes past cnt: the first particle). No gathers:
      * they are slow here. A partial chunk reads past its particles only with `overread` (P2G:
-     * nobody writes positions then; G2P moves other blocks' particles concurrently). */
+     * nobody writes positions then; G2P moves other blocks' particles concurrently). In a block
+     * whose perm increases (`ascending`, bin_dim.c), equal span and count mean consecutive;
+     * elsewhere every index is compared. */
     const double *xb;
     double xl[WCH * D];
     const uint32_t q0 = perm[i0];
-    int run = (size_t)q0 + WCH <= n && (overread || cnt == WCH);
-    for (int j = 1; j < cnt; j++) run &= perm[i0 + (uint32_t)j] == q0 + (uint32_t)j;
+    int run = perm[i0 + (uint32_t)cnt - 1] - q0 == (uint32_t)(cnt - 1) && (size_t)q0 + WCH <= n && (overread || cnt == WCH);
+    if (run && !ascending) {
+        uint32_t off = 0; /* a full chunk: a fixed count, which the compiler vectorises */
+        if (cnt == WCH)
+            for (int j = 0; j < WCH; j++) off |= perm[i0 + (uint32_t)j] ^ (q0 + (uint32_t)j);
+        else
+            for (int j = 1; j < cnt; j++) off |= perm[i0 + (uint32_t)j] ^ (q0 + (uint32_t)j);
+        run = off == 0;
+    }
     if (run) {
         xb = x + (size_t)q0 * D;
     } else {

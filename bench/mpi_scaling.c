@@ -50,6 +50,11 @@ int main(int argc, char **argv) {
     int rank, ranks;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    if (argc == 2 && !strcmp(argv[1], "--stage-names")) { /* the CSV header's stage columns */
+        for (int s = 0; s < SM_STAGE_COUNT; s++) printf(",%s_s", sm_stage_name((sm_stage)s));
+        MPI_Finalize();
+        return 0;
+    }
     if (argc != 6 || (strcmp(argv[2], "strong") && strcmp(argv[2], "weak"))) {
         if (rank == 0) fprintf(stderr, "usage: mpirun -np R mpi_scaling DIM strong|weak PARTICLES STEPS THREADS\n");
         MPI_Finalize();

@@ -7,10 +7,13 @@
  *    emitted ones every frame, and their masses to the seeded plus the emitted mass;
  *  - the thrown ball's first particle crosses rank boundaries (its owner changes at least once on
  *    2 and 3 ranks, at least twice on 4); every rank holds particles at the start (the cuts balance them);
- *  - the state does change (the hash after the run differs from the start's). */
+ *  - the state does change (the hash after the run differs from the start's);
+ *  - a checkpoint written half way on N ranks (collective; rank 0 writes it) resumes on N - 1
+ *    ranks (1 when N = 1) to the same final hash. */
 #include "test_util.h"
 #include "sandmpm/sandmpm_mpi.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 #define FRAMES 12
@@ -87,6 +90,57 @@ static sm_world *build(int dim, int threads, size_t *ball_id) {
     return w;
 }
 
+/* A growing memory buffer for sm_world_save. */
+typedef struct membuf {
+    unsigned char *data;
+    size_t len, cap;
+} membuf;
+
+static int mem_write(void *user, const void *data, size_t len) {
+    membuf *m = user;
+    if (m->len + len > m->cap) {
+        size_t cap = m->cap ? m->cap : 65536;
+        while (cap < m->len + len) cap *= 2;
+        unsigned char *q = realloc(m->data, cap);
+        if (!q) return 1;
+        m->data = q;
+        m->cap = cap;
+    }
+    memcpy(m->data + m->len, data, len);
+    m->len += len;
+    return 0; /* sm_write_fn: 0 is success */
+}
+
+/* Resumes the checkpoint (rank 0's bytes) on ranks [0, M) and runs it to the end: the final id
+ * hash, the same on every rank (0 on ranks past M). */
+static uint64_t resume(membuf *ck, int M) {
+    unsigned long long len = ck->len;
+    MPI_Bcast(&len, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+    if (rank != 0) {
+        ck->data = malloc(len);
+        ck->len = len;
+    }
+    MPI_Bcast(ck->data, (int)len, MPI_BYTE, 0, MPI_COMM_WORLD);
+    MPI_Comm part;
+    MPI_Comm_split(MPI_COMM_WORLD, rank < M ? 0 : MPI_UNDEFINED, rank, &part);
+    uint64_t h = 0;
+    if (part != MPI_COMM_NULL) {
+        sm_world *w = NULL;
+        char err[256];
+        CHECK(sm_world_load(ck->data, ck->len, &w, err, sizeof err) == SM_OK);
+        if (w) {
+            CHECK(sm_world_distribute(w, part) == SM_OK);
+            for (int f = FRAMES / 2 + 1; f <= FRAMES; f++) CHECK(sm_world_advance(w, f * FRAME_DT) == SM_OK);
+            h = sm_world_id_hash(w);
+            sm_world_destroy(w);
+        }
+        MPI_Comm_free(&part);
+    }
+    uint64_t all = 0;
+    MPI_Allreduce(&h, &all, 1, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD);
+    return all;
+}
+
 /* This rank's particle count and mass, summed over the ranks. */
 static void totals(const sm_world *w, double *count, double *mass) {
     sm_particles_view pv;
@@ -138,7 +192,9 @@ static void run(int dim) {
     CHECK(!any_empty);
     int owner = holder(w, ball_id), changes = 0;
     CHECK(owner >= 0);
+    membuf ck = {NULL, 0, 0};
     for (int f = 1; f <= FRAMES; f++) {
+        if (f == FRAMES / 2 + 1) CHECK(sm_world_save(w, mem_write, &ck) == SM_OK); /* collective */
         const sm_status st = sm_world_advance(w, f * FRAME_DT);
         CHECK(st == SM_OK);
         if (st != SM_OK) {
@@ -167,6 +223,13 @@ static void run(int dim) {
                ds.migrated_sent, ds.bytes_sent, ds.messages_sent, (unsigned long long)ds.rebalances);
     CHECK(h == ref[0]);
     CHECK(h != h_start);
+    const int M = ranks > 1 ? ranks - 1 : 1;
+    const uint64_t hr = resume(&ck, M);
+    free(ck.data);
+    if (rank == 0)
+        printf("%dD: the checkpoint of frame %d written on %d ranks, resumed on %d: id hash %016llx\n", dim, FRAMES / 2,
+               ranks, M, (unsigned long long)hr);
+    CHECK(hr == ref[0]);
     if (ranks >= 2) CHECK(changes >= (ranks >= 4 ? 2 : 1)); /* several boundaries on 4 ranks */
     sm_world_destroy(w);
 }

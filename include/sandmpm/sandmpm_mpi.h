@@ -10,8 +10,10 @@
  *
  * Particles added later (sm_world_add_particles, seeding, emitters) are added on every rank, and
  * each rank keeps the ones in its blocks. sm_world_particles and sm_world_diagnostics report the
- * calling rank's particles. Not yet across ranks: the implicit integrator and checkpoints
- * (sm_world_distribute refuses an implicit world; sm_world_save refuses a distributed one). */
+ * calling rank's particles. sm_world_save is collective: rank 0 writes one checkpoint of the whole
+ * run (every particle, in id order), which resumes on any number of ranks (sm_world_load on each,
+ * then sm_world_distribute) or on none. Not yet across ranks: the implicit integrator
+ * (sm_world_distribute refuses an implicit world). */
 #ifndef SANDMPM_MPI_H
 #define SANDMPM_MPI_H
 

@@ -179,14 +179,15 @@ void sm_dist_adopt(sm_world *w, size_t first) {
     d->owned = j;
 }
 
-/* Every rank's particles gathered on rank 0, hashed in id order there, the hash sent to all. */
-uint64_t sm_dist_id_hash(const sm_world *w) {
+/* Every rank's particles gathered into *P on rank 0 (collective; P empty elsewhere); 0 when out of
+ * memory on some rank (every rank returns the same). */
+static int gather_particles(const sm_world *w, sm_particles *P) {
     const sm_dist *d = w->dist;
     const size_t ps = sm_particles_packed_size(d->dim);
     const int n = (int)d->owned;
+    memset(P, 0, sizeof *P);
     unsigned char *mine = malloc((size_t)(n ? n : 1) * ps);
     int *counts = malloc(2 * (size_t)d->size * sizeof *counts);
-    uint64_t h = 0;
     int ok = mine && counts, all_ok = 0;
     MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
     if (all_ok) {
@@ -201,23 +202,65 @@ uint64_t sm_dist_id_hash(const sm_world *w) {
             }
         unsigned char *all = d->rank == 0 ? malloc((size_t)(total ? total : 1)) : NULL;
         MPI_Gatherv(mine, bytes, MPI_BYTE, all, counts, counts + d->size, MPI_BYTE, 0, d->comm);
-        if (d->rank == 0 && all) {
-            sm_particles P;
-            memset(&P, 0, sizeof P);
-            const size_t np = (size_t)total / ps;
-            if (sm_particles_reserve(&P, d->dim, np) == SM_OK) {
-                for (size_t i = 0; i < np; i++) sm_particles_unpack(&P, d->dim, i, all + i * ps);
-                P.n = np;
-                h = sm_particles_hash_by_id(&P, d->dim);
-            }
-            sm_particles_free(&P);
+        ok = d->rank != 0 || all;
+        const size_t np = (size_t)total / ps;
+        if (d->rank == 0 && all && (ok = sm_particles_reserve(P, d->dim, np) == SM_OK)) {
+            for (size_t i = 0; i < np; i++) sm_particles_unpack(P, d->dim, i, all + i * ps);
+            P->n = np;
         }
         free(all);
-        MPI_Bcast(&h, 1, MPI_UINT64_T, 0, d->comm);
+        MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
     }
     free(mine);
     free(counts);
+    return all_ok;
+}
+
+/* Every rank's particles gathered on rank 0, hashed in id order there, the hash sent to all. */
+uint64_t sm_dist_id_hash(const sm_world *w) {
+    sm_particles P;
+    uint64_t h = 0;
+    if (gather_particles(w, &P) && w->dist->rank == 0) h = sm_particles_hash_by_id(&P, w->dim);
+    sm_particles_free(&P);
+    MPI_Bcast(&h, 1, MPI_UINT64_T, 0, w->dist->comm);
     return h;
+}
+
+/* A checkpoint of the whole run, written by rank 0 (checkpoint.c's format, one rank's world): every
+ * particle in id order, the counters summed and the last step's largest speed taken over the
+ * ranks, so that it resumes on any number of ranks (or none) as the run would have gone on. */
+sm_status sm_dist_save(const sm_world *w, sm_write_fn write, void *user) {
+    const sm_dist *d = w->dist;
+    uint64_t counts[2] = {w->clamped, w->projected}, sums[2];
+    MPI_Allreduce(counts, sums, 2, MPI_UINT64_T, MPI_SUM, d->comm);
+    const double vmax2 = sm_dist_max(w, w->step_vmax2);
+    sm_particles P;
+    sm_status st = SM_OK;
+    if (!gather_particles(w, &P)) st = SM_ERR_NOMEM;
+    else if (d->rank == 0) {
+        uint32_t *order = malloc((P.n ? P.n : 1) * sizeof *order);
+        uint64_t *pairs = malloc((P.n ? P.n : 1) * sizeof *pairs);
+        if (!order || !pairs) st = SM_ERR_NOMEM;
+        else {
+            for (size_t i = 0; i < P.n; i++) pairs[i] = ((uint64_t)P.id[i] << 32) | i;
+            qsort(pairs, P.n, sizeof *pairs, cmp_u64);
+            for (size_t i = 0; i < P.n; i++) order[i] = (uint32_t)pairs[i];
+            sm_particles_permute(&P, w->dim, order);
+            sm_world one = *w; /* a shallow copy: the save only reads it */
+            one.p = P;
+            one.dist = NULL;
+            one.clamped = sums[0];
+            one.projected = sums[1];
+            one.step_vmax2 = vmax2;
+            st = sm_world_save(&one, write, user);
+        }
+        free(order);
+        free(pairs);
+    }
+    sm_particles_free(&P);
+    int code = (int)st;
+    MPI_Bcast(&code, 1, MPI_INT, 0, d->comm);
+    return (sm_status)code;
 }
 
 /* ---- Creation and the public calls ---------------------------------------------------------- */

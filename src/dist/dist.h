@@ -48,6 +48,9 @@ int sm_dist_max_int(const struct sm_world *w, int v);
 int sm_dist_block_complete(const struct sm_world *w, uint64_t key);
 /* sm_world_id_hash of a distributed world (collective). */
 uint64_t sm_dist_id_hash(const struct sm_world *w);
+/* sm_world_save of a distributed world (collective; rank 0 writes a one-rank checkpoint of the
+ * whole run, in id order, which any number of ranks can resume). */
+sm_status sm_dist_save(const struct sm_world *w, sm_write_fn write, void *user);
 void sm_dist_free(sm_dist *d);
 #else
 static inline sm_status sm_dist_exchange(struct sm_world *w, const sm_step_ctx *c) { (void)w; (void)c; return SM_OK; }
@@ -58,6 +61,10 @@ static inline double sm_dist_max(const struct sm_world *w, double v) { (void)w; 
 static inline int sm_dist_max_int(const struct sm_world *w, int v) { (void)w; return v; }
 static inline int sm_dist_block_complete(const struct sm_world *w, uint64_t key) { (void)w; (void)key; return 1; }
 static inline uint64_t sm_dist_id_hash(const struct sm_world *w) { (void)w; return 0; }
+static inline sm_status sm_dist_save(const struct sm_world *w, sm_write_fn write, void *user) {
+    (void)w; (void)write; (void)user;
+    return SM_ERR_INVALID;
+}
 static inline void sm_dist_free(sm_dist *d) { (void)d; }
 #endif
 

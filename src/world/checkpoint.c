@@ -103,7 +103,7 @@ static void put_particles(writer *o, const sm_world *w) {
 }
 
 sm_status sm_world_save(const sm_world *w, sm_write_fn write, void *user) {
-    if (w->dist) return SM_ERR_INVALID; /* not across ranks yet (sandmpm_mpi.h) */
+    if (w->dist) return sm_dist_save(w, write, user); /* gathered on rank 0 (dist.c) */
     writer o = {write, user, SM_OK};
     put(&o, CKPT_MAGIC, 8);
     put_u32(&o, CKPT_VERSION);

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Distributed scaling on this machine (issue 19, docs/scaling.md): strong scaling (a fixed 3D
+# block on 1 and 2 ranks, 4 oversubscribed: functional only), weak scaling (a fixed block per
+# rank), the halo traffic per step and the time per stage, from bench/mpi_scaling; then the model
+# for 1e9 particles (scripts/scaling_model.py) from those rows.
+#   scripts/scaling.sh [BUILD]     (default build-rel: a Release build with SM_MPI)
+# Writes out/scaling/scaling.csv and out/scaling/model.md.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+B=${1:-build-rel}
+[ -x "$B/bench/mpi_scaling" ] || cmake --build "$B" --target mpi_scaling >/dev/null
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+mkdir -p out/scaling
+csv=out/scaling/scaling.csv
+{
+    printf 'dim,mode,ranks,threads,particles,steps,seconds,particle_steps_per_s,ghosts_per_step,migrating_per_step,bytes_per_step,messages_per_step,imbalance,recuts'
+    "$B/bench/mpi_scaling" --stage-names 2>/dev/null || true
+    echo
+} > "$csv"
+run() { # ranks threads args...
+    local np=$1 th=$2; shift 2
+    mpirun -np "$np" --oversubscribe --bind-to none -x OMP_NUM_THREADS="$th" "$B/bench/mpi_scaling" "$@" "$th" | tee -a "$csv"
+}
+for n in 200000 1000000; do
+    run 1 1 3 strong $n 30
+    run 1 2 3 strong $n 30
+    run 2 1 3 strong $n 30
+    run 4 1 3 strong $n 10 # oversubscribed: functional only
+done
+run 1 1 3 weak 500000 30
+run 2 1 3 weak 500000 30
+run 1 1 2 strong 1000000 30
+run 2 1 2 strong 1000000 30
+/usr/bin/python3 scripts/scaling_model.py "$csv" | tee out/scaling/model.md

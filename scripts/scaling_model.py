@@ -1,0 +1,63 @@
+#!/usr/bin/env python3
+"""The model of docs/scaling.md: a distributed 3D run of 1e9 particles projected from the rows
+that scripts/scaling.sh measured on this machine (bench/mpi_scaling's CSV).
+
+  scripts/scaling_model.py out/scaling/scaling.csv [BYTES_PER_PARTICLE]
+
+Inputs taken from the CSV (3D rows): the compute rate per core (1 rank, 1 thread, 1e6 particles);
+the P2G seconds per particle-step (same row: ghosts cost one more P2G each); the ghost count of
+the 2-rank split (one interface) at 1e6 particles, which fixes k in ghosts = k N^(2/3) for one
+face; the bytes per ghost (bytes per step over ghosts per step). BYTES_PER_PARTICLE: the heap per
+particle including the grid (`sandmpm bench --dim 3 --precision float`, default 162.6).
+
+Assumptions (each is a line below): a node of 64 cores at this machine's per-core speed, one rank
+per node; a rank's blocks form a cube-like region with 6 neighbours, each face receiving the same
+layer as the 2-rank interface; no overlap of the exchange with compute (the code has none yet);
+full-duplex links, so a step's network time is the bytes received over the bandwidth, plus 26
+messages at 5 us each."""
+import csv
+import sys
+
+rows = list(csv.DictReader(open(sys.argv[1])))
+bpp = float(sys.argv[2]) if len(sys.argv) > 2 else 162.6
+r3 = [r for r in rows if r["dim"] == "3" and r["mode"] == "strong"]
+
+
+def pick(ranks, threads, n):
+    for r in r3:
+        if int(r["ranks"]) == ranks and int(r["threads"]) == threads and abs(float(r["particles"]) / n - 1) < 0.05:
+            return r
+    sys.exit("scaling_model: no 3D strong row for %d ranks x %d threads, %g particles" % (ranks, threads, n))
+
+
+one = pick(1, 1, 1e6)
+two = pick(2, 1, 1e6)
+rate_core = float(one["particle_steps_per_s"])
+steps = float(one["steps"])
+p2g_core = float(one["p2g_s"]) / (float(one["particles"]) * steps)  # s per particle-step, one core
+n2 = float(two["particles"])
+ghosts2 = float(two["ghosts_per_step"])  # both directions across the one interface
+k = ghosts2 / 2 / n2 ** (2.0 / 3)  # one side's layer per face, over N^(2/3)
+bytes_per_ghost = float(two["bytes_per_step"]) / (ghosts2 + float(two["migrating_per_step"]))
+
+CORES = 64
+N = 1e9
+MSG_S = 5e-6
+print("Inputs (measured): %.3g particle-steps/s per core; P2G %.3g ns per particle-step per core; "
+      "one interface's layer k = %.3g x N^(2/3) (%.0f ghosts per step at %.3g particles on 2 ranks); "
+      "%.0f bytes per ghost; %.1f bytes per particle with the grid.\n" %
+      (rate_core, p2g_core * 1e9, k, ghosts2, n2, bytes_per_ghost, bpp))
+print("| nodes | particles per node | ghosts per node per step | memory per node | halo per step | "
+      "network time at 25 / 100 Gb/s | compute time | particle-steps/s at 25 / 100 Gb/s | limited by |")
+print("|---|---|---|---|---|---|---|---|---|")
+for nodes in (16, 64, 256):
+    n = N / nodes
+    g = 6 * k * n ** (2.0 / 3)
+    mem = (n + g) * bpp
+    halo = g * bytes_per_ghost
+    t_comp = n / (rate_core * CORES) + g * p2g_core / CORES
+    t_net = [halo / (gbps * 1e9 / 8) + 26 * MSG_S for gbps in (25, 100)]
+    rate = [N / (t_comp + t) for t in t_net]
+    limit = "network" if t_net[0] > t_comp else "compute"
+    print("| %d | %.3g | %.3g (%.0f%%) | %.1f GB | %.2f GB | %.3f / %.3f s | %.3f s | %.3g / %.3g | %s at 25 Gb/s |" %
+          (nodes, n, g, 100 * g / n, mem / 1e9, halo / 1e9, t_net[0], t_net[1], t_comp, rate[0], rate[1], limit))

@@ -45,33 +45,61 @@ static void test_inject_nan(sm_world *w, int f) {
     sm_world_particle_velocities(w)[0] = (sm_real)NAN;
 }
 
-static sm_status frame_loop(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm_run_result *res, char *err,
-                            size_t errlen) {
+/* The world the sinks see at this frame: w itself on one process; across ranks the writer's
+ * gathered view (NULL on the other ranks). */
+static sm_status sink_world(const sm_run_config *cfg, sm_world **view, char *err, size_t errlen) {
+    *view = cfg->info.w;
+    return cfg->ranks ? cfg->ranks->gather(cfg->ranks->ctx, cfg->info.w, view, err, errlen) : SM_OK;
+}
+
+/* Across ranks, the writer's status everywhere (the sinks run on the writer only). */
+static sm_status agree(const sm_run_config *cfg, sm_status st, char *err, size_t errlen) {
+    return cfg->ranks ? cfg->ranks->agree(cfg->ranks->ctx, st, err, errlen) : st;
+}
+
+static int stop_requested(const sm_run_config *cfg) {
+    const int stop = cfg->stop && *cfg->stop;
+    return cfg->ranks ? cfg->ranks->any(cfg->ranks->ctx, stop) : stop;
+}
+
+/* Frame f handed to the sinks (none on a rank that does not write). */
+static sm_status write_frame(sm_run_frame *fr, sm_diagnostics *d, sm_world *view, int f, sm_sink *sinks, int nsinks,
+                             sm_run_result *res, char *err, size_t errlen) {
+    if (!view) return SM_OK;
+    sm_world_diagnostics(view, d);
+    fr->frame = f;
+    fr->w = view;
+    fr->d = d;
+    for (int i = 0; i < nsinks; i++) {
+        sm_status st = sinks[i].frame(&sinks[i], fr, err, errlen);
+        if (st != SM_OK) {
+            res->failed_sink = sinks[i].name;
+            return st;
+        }
+    }
+    return SM_OK;
+}
+
+/* Frames first..frames; view: the sinks' world as the loop starts (sink_world). */
+static sm_status frame_loop(const sm_run_config *cfg, sm_world *view, sm_sink *sinks, int nsinks, sm_run_result *res,
+                            char *err, size_t errlen) {
     sm_run_frame fr;
     sm_diagnostics d;
     fr.out_dir = cfg->info.out_dir;
-    fr.w = cfg->info.w;
-    fr.d = &d;
     fr.start_wall = sm_run_wall();
     res->frames_written = cfg->info.first_frame;
     for (int f = cfg->info.first_frame; f <= cfg->info.frames; f++) {
-        if (f > 0) {
-            if (cfg->stop && *cfg->stop) {
+        if (f > 0) { /* after a resume, first_frame is one frame past the world's time */
+            if (stop_requested(cfg)) {
                 res->stopped = 1;
                 return SM_OK;
             }
             sm_status st = advance_to(cfg, f, err, errlen);
+            if (st == SM_OK) st = sink_world(cfg, &view, err, errlen);
             if (st != SM_OK) return st;
         }
-        sm_world_diagnostics(cfg->info.w, &d);
-        fr.frame = f;
-        for (int i = 0; i < nsinks; i++) {
-            sm_status st = sinks[i].frame(&sinks[i], &fr, err, errlen);
-            if (st != SM_OK) {
-                res->failed_sink = sinks[i].name;
-                return st;
-            }
-        }
+        sm_status st = agree(cfg, write_frame(&fr, &d, view, f, sinks, nsinks, res, err, errlen), err, errlen);
+        if (st != SM_OK) return st;
         res->frames_written = f + 1;
         test_inject_nan(cfg->info.w, f);
     }
@@ -81,14 +109,20 @@ static sm_status frame_loop(const sm_run_config *cfg, sm_sink *sinks, int nsinks
 sm_status sm_run_frames(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm_run_result *res, char *err,
                         size_t errlen) {
     memset(res, 0, sizeof *res);
-    sm_status st = SM_OK;
+    sm_world *view;
+    sm_status st = sink_world(cfg, &view, err, errlen);
+    if (st != SM_OK) return st;
+    if (!view) nsinks = 0; /* a rank that does not write */
+    sm_run_info info = cfg->info;
+    info.w = view;
     int begun = 0;
     for (; begun < nsinks && st == SM_OK; begun++) {
-        if (sinks[begun].begin) st = sinks[begun].begin(&sinks[begun], &cfg->info, err, errlen);
+        if (sinks[begun].begin) st = sinks[begun].begin(&sinks[begun], &info, err, errlen);
         if (st != SM_OK) res->failed_sink = sinks[begun].name;
     }
     if (st != SM_OK) begun--; /* the failed sink cleaned up after itself */
-    if (st == SM_OK) st = frame_loop(cfg, sinks, nsinks, res, err, errlen);
+    st = agree(cfg, st, err, errlen);
+    if (st == SM_OK) st = frame_loop(cfg, view, sinks, nsinks, res, err, errlen);
     for (int i = 0; i < begun; i++) {
         if (!sinks[i].end) continue;
         char e2[SM_MSG_MAX];
@@ -99,5 +133,5 @@ sm_status sm_run_frames(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm
             snprintf(err, errlen, "%s", e2);
         }
     }
-    return st;
+    return agree(cfg, st, err, errlen);
 }

@@ -46,6 +46,21 @@ struct sm_sink {
     sm_status (*end)(sm_sink *s, sm_status run_status, char *err, size_t errlen);
 };
 
+/* A run across MPI ranks (cli/ranks.c): every rank runs the frame loop and advances its part of
+ * the world; the sinks run on the writing rank only, on the whole world gathered there. NULL in
+ * sm_run_config.ranks for a run on one process. Each call is collective (every rank, in step). */
+typedef struct sm_run_ranks {
+    void *ctx;
+    int writer; /* 1 on the rank that runs the sinks (rank 0) */
+    /* The world the sinks see at this frame on the writer: every rank's particles in id order
+     * (NULL elsewhere); a failure's status with its message in err, on every rank. */
+    sm_status (*gather)(void *ctx, const sm_world *w, sm_world **view, char *err, size_t errlen);
+    /* The writer's status (and message) on every rank. */
+    sm_status (*agree)(void *ctx, sm_status st, char *err, size_t errlen);
+    /* Non-zero on every rank if flag is non-zero on any. */
+    int (*any)(void *ctx, int flag);
+} sm_run_ranks;
+
 /* The run's settings beyond the sinks. */
 typedef struct sm_run_config {
     sm_run_info info;
@@ -56,6 +71,7 @@ typedef struct sm_run_config {
     /* NULL, or a flag that, once non-zero, stops the run before the next frame is computed (a
      * signal handler sets it). */
     volatile sig_atomic_t *stop;
+    const sm_run_ranks *ranks; /* NULL, or a run across MPI ranks */
 } sm_run_config;
 
 typedef struct sm_run_result {

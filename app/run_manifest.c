@@ -58,6 +58,14 @@ sm_status sm_run_manifest_write(const char *dir, const sm_run_manifest *m, char 
             fprintf(a.f, "frame_files %s %d %d\n", kind_ext[k], m->first[k], m->last[k]);
     for (int b = 0; b < SM_RUNFILE_COUNT; b++)
         if (m->files & (1u << b)) fprintf(a.f, "file %s\n", runfile_names[b]);
+    if (m->ranks > 1) {
+        fprintf(a.f, "ranks %d\n", m->ranks);
+        if (m->threads > 0) fprintf(a.f, "threads_per_rank %d\n", m->threads);
+        else fprintf(a.f, "threads_per_rank auto\n");
+        fprintf(a.f, "rank_particles");
+        for (int r = 0; r < m->ranks && m->rank_particles; r++) fprintf(a.f, " %llu", m->rank_particles[r]);
+        fprintf(a.f, "\n");
+    }
     return sm_atomic_commit(&a, err, errlen);
 }
 

@@ -16,7 +16,10 @@
  *   state running|complete|stopped|failed
  *   frame_files EXT FIRST LAST     frame_FIRST.EXT .. frame_LAST.EXT were written (EXT ply, vtp, png)
  *   file NAME                      a file of the run (frames.pvd, diagnostics.csv, render.txt,
- *                                  poses.csv, video.mp4), and "checkpoints" for checkpoints/ckpt_*.smc */
+ *                                  poses.csv, video.mp4), and "checkpoints" for checkpoints/ckpt_*.smc
+ *   ranks N                        only for a run across N > 1 MPI ranks: N,
+ *   threads_per_rank T|auto        the threads in each (auto: chosen per step),
+ *   rank_particles N0 N1 ...       and each rank's particles at the last frame written */
 #ifndef SM_APP_RUN_MANIFEST_H
 #define SM_APP_RUN_MANIFEST_H
 
@@ -48,6 +51,11 @@ typedef struct sm_run_manifest {
     char state[16];
     int first[SM_FRAME_KINDS], last[SM_FRAME_KINDS]; /* frames written; last < first: none */
     unsigned files;                                  /* SM_RUNFILE_* */
+    /* A run across MPI ranks (written when ranks > 1, not read back): the ranks, the threads per
+     * rank (0: chosen per step) and each rank's particles at the last frame (the caller's array of
+     * ranks counts, alive while the manifest is written). */
+    int ranks, threads;
+    const unsigned long long *rank_particles;
 } sm_run_manifest;
 
 /* "ply", "vtp", "png"; the name of file bit b (one of SM_RUNFILE_*). */

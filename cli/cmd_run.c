@@ -183,13 +183,15 @@ static void say_what_is_complete(const char *out, int frames_written, int nframe
 /* The frame loop into out; the message of a failure or a stop printed. *stopped: the signal that
  * stopped it early, or 0. */
 static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, int nframes, int first, uint64_t hash,
-                            const sm_run_manifest *manifest, int *stopped) {
+                            const sm_run_manifest *manifest, const cli_ranks *ranks, int *stopped) {
     const sm_scene_settings *st = sm_scene_get_settings(sc);
     const sm_run_request req = run_request(a, hash, nframes);
     sm_run_outputs o;
     cli_progress_config progress;
     memset(&progress, 0, sizeof progress);
     progress.out_dir = out;
+    progress.ranks = ranks->count;
+    progress.threads = a->so.threads;
     choose_sinks(a, &req, st, manifest, &o, &progress);
     sm_run_config cfg;
     memset(&cfg, 0, sizeof cfg);
@@ -201,6 +203,7 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
     cfg.world_error = motion_error;
     cfg.world_error_ctx = sc;
     cfg.stop = &cli_stop;
+    cfg.ranks = ranks->count > 1 ? &ranks->hooks : NULL;
     sm_run_result res;
     char err[SM_MSG_MAX];
     sm_status s = sm_run_frames(&cfg, o.sinks, o.nsinks, &res, err, sizeof err);
@@ -210,9 +213,10 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
     if (*stopped)
         fprintf(stderr, "sandmpm run: stopped by %s after frame %d (t = %.6g s)\n", cli_signal_name(*stopped),
                 res.frames_written - 1, (res.frames_written - 1) / st->fps);
-    if (*stopped && res.frames_written > 0) {
+    sm_world *whole = ranks->count > 1 ? ranks->view : cfg.info.w; /* NULL on ranks other than 0 */
+    if (*stopped && res.frames_written > 0 && whole) {
         char path[SM_PATH_MAX], e2[SM_MSG_MAX];
-        sm_status cs = sm_checkpoint_write(out, cfg.info.w, res.frames_written - 1, hash, a->keep, path, sizeof path, e2, sizeof e2);
+        sm_status cs = sm_checkpoint_write(out, whole, res.frames_written - 1, hash, a->keep, path, sizeof path, e2, sizeof e2);
         if (cs == SM_OK)
             fprintf(stderr, "sandmpm run: state at frame %d kept in %s; continue with: sandmpm run %s --out %s --resume\n",
                     res.frames_written - 1, path, a->so.scene ? a->so.scene : "", out);
@@ -248,9 +252,11 @@ static uint64_t scene_hash(const cli_scene_opts *so) {
     return sm_run_scene_hash(so->scene, so->params, so->nparams, so->quality);
 }
 
-/* --resume: the newest valid checkpoint in out/checkpoints restored into w; *first = its frame + 1.
- * A corrupt or truncated one is reported and the previous one tried. */
-static sm_status resume_world(const run_args *a, sm_world *w, const char *out, uint64_t hash, int *first) {
+/* --resume: the newest valid checkpoint in out/checkpoints restored into w; *first = its frame + 1;
+ * *kept: its bytes (malloc'd, *kept_len of them). A corrupt or truncated one is reported and the
+ * previous one tried. */
+static sm_status resume_world(const run_args *a, sm_world *w, const char *out, uint64_t hash, int *first,
+                              unsigned char **kept, size_t *kept_len) {
     char dir[SM_PATH_MAX];
     if (snprintf(dir, sizeof dir, "%s/checkpoints", out) >= (int)sizeof dir - SM_NAME_RESERVE) return SM_ERR_IO;
     int frames[4096], n = 0;
@@ -291,17 +297,37 @@ static sm_status resume_world(const run_args *a, sm_world *w, const char *out, u
             return SM_ERR_INVALID;
         }
         sm_status st = sm_world_restore(w, stream, len);
-        free(stream);
         if (st != SM_OK) {
+            free(stream);
             fprintf(stderr, "sandmpm run: %s: %s; trying the previous checkpoint\n", path, sm_world_errmsg(w));
             continue;
         }
+        *kept = stream;
+        *kept_len = len;
         fprintf(stderr, "sandmpm run: resuming from %s (frame %d)\n", path, frame);
         *first = frame + 1;
         return SM_OK;
     }
     fprintf(stderr, "sandmpm run: --resume: no valid checkpoint in %s/\n", dir);
     return SM_ERR_IO;
+}
+
+/* --resume on every rank: rank 0 finds the checkpoint and sends its bytes to the others. */
+static sm_status resume_ranks(const run_args *a, sm_world *w, const char *out, uint64_t hash, int *first) {
+    unsigned char *stream = NULL;
+    size_t len = 0;
+    sm_status st = SM_OK;
+    if (cli_rank() == 0) st = resume_world(a, w, out, hash, first, &stream, &len);
+    st = cli_ranks_share_status(st);
+    if (st == SM_OK && cli_ranks_count() > 1) {
+        cli_ranks_share_ints(first, 1);
+        if (!cli_ranks_share_bytes(&stream, &len)) st = SM_ERR_NOMEM;
+        else if (cli_rank() != 0) st = sm_world_restore(w, stream, len);
+        st = cli_ranks_worst(st);
+        if (st != SM_OK) fprintf(stderr, "sandmpm run: --resume: the checkpoint could not be sent to every rank\n");
+    }
+    free(stream);
+    return st;
 }
 
 /* The run manifest's description of this run, before any frame (app/run_outputs.h). */
@@ -333,22 +359,44 @@ static int run_command(int argc, char **argv) {
         snprintf(outbuf, sizeof outbuf, "out/%s", a.so.scene ? set->name : "default");
         out = outbuf;
     }
-    if (st == SM_OK) st = prepare_folder(out);
+    if (st == SM_OK && cli_ranks_count() > 1 && sm_world_get_def(sm_scene_world(sc))->integrator == SM_INTEGRATOR_IMPLICIT) {
+        fprintf(stderr, "sandmpm run: the scene uses the implicit integrator, which does not run across MPI ranks yet "
+                        "(issue 19); run it without mpirun, or with integrator = \"explicit\"\n");
+        st = SM_ERR_INVALID;
+    }
+    st = cli_ranks_worst(st); /* e.g. one rank's machine without the memory */
+    if (st == SM_OK && cli_rank() == 0) st = prepare_folder(out);
     const uint64_t hash = scene_hash(&a.so);
     a.ckpt_every = sm_run_checkpoint_every(a.ckpt_every, set);
     int first = 0;
     sm_run_manifest manifest;
     describe_run(&a, set, hash, nframes, &manifest);
     const cli_claim claim = {a.resume, a.overwrite};
-    if (st == SM_OK) st = cli_claim_folder(out, &claim, &manifest);
-    if (st == SM_OK && a.resume) st = resume_world(&a, sm_scene_world(sc), out, hash, &first);
-    if (st == SM_OK) {
+    if (st == SM_OK && cli_rank() == 0) st = cli_claim_folder(out, &claim, &manifest);
+    st = cli_ranks_share_status(st);
+    if (st == SM_OK && a.resume) st = resume_ranks(&a, sm_scene_world(sc), out, hash, &first);
+    cli_ranks ranks;
+    sm_scene *view = NULL; /* rank 0 of several: the scene built again, for the gathered world */
+    if (st == SM_OK && cli_ranks_count() > 1 && cli_rank() == 0 && (st = cli_load_scene("run", &a.so, &view)) == SM_OK)
+        st = cli_build_scene("run", view);
+    st = cli_ranks_worst(st);
+    char err[SM_MSG_MAX];
+    sm_status rs = st == SM_OK ? cli_ranks_open(&ranks, sm_scene_world(sc), view ? sm_scene_world(view) : NULL, err,
+                                                sizeof err)
+                               : SM_OK;
+    if (rs != SM_OK) fprintf(stderr, "sandmpm run: %s\n", err);
+    if (st == SM_OK && (st = rs) == SM_OK) {
+        manifest.ranks = ranks.count;
+        manifest.threads = a.so.threads;
+        manifest.rank_particles = ranks.shares;
         cli_signals_install();
-        st = run_frames(&a, sc, out, nframes, first, hash, &manifest, &stopped);
+        st = run_frames(&a, sc, out, nframes, first, hash, &manifest, &ranks, &stopped);
+        cli_ranks_close(&ranks);
     }
     sm_scene_destroy(sc);
+    if (view) sm_scene_destroy(view);
     if (stopped) return cli_exit_code_signal(stopped);
-    if (st == SM_OK && a.video) st = cli_make_video(out, fps);
+    if (st == SM_OK && a.video && cli_rank() == 0) st = cli_make_video(out, fps);
     if (cli_stop) return cli_exit_code_signal(cli_stop); /* during the video */
     return cli_exit_code(st);
 }

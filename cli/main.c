@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
+#include "sandmpm/config.h"
 
 static const struct {
     const char *name;
@@ -97,23 +98,26 @@ static int dispatch(int argc, char **argv) {
     return unknown_command(c);
 }
 
-/* What went to stdout (info, bench's table, help) is checked too: a full disk or a closed pipe is
- * an I/O failure, not success. */
-/* Started as one of several MPI ranks (mpirun -np N, N > 1; OpenMPI's or PMI's variables): the
- * program does not run across ranks yet (the library does: sandmpm_mpi.h), and N copies of one
- * run would write one output folder at once. */
-static int launched_ranks(void) {
-    const char *v = getenv("OMPI_COMM_WORLD_SIZE");
-    if (!v) v = getenv("PMI_SIZE");
-    return v ? atoi(v) : 1;
+/* Under mpirun with several ranks only `run` runs (across the ranks, cli/ranks.c); a build
+ * without MPI refuses rather than write one folder N times. */
+static int refuse_ranks(int argc, char **argv, int ranks) {
+    const int is_run = argc > 1 && !strcmp(argv[1], "run") && !cli_help_requested(argc - 2, argv + 2);
+    if (!SM_HAVE_MPI)
+        fprintf(stderr, "sandmpm: started as %d MPI ranks, but this build has no MPI (configure with SM_MPI=ON and "
+                        "OpenMPI installed: libopenmpi-dev); run it without mpirun\n", ranks);
+    else if (!is_run)
+        fprintf(stderr, "sandmpm: started as %d MPI ranks; only `sandmpm run` runs across ranks, run the others "
+                        "without mpirun\n", ranks);
+    return !SM_HAVE_MPI || !is_run;
 }
 
+/* What went to stdout (info, bench's table, help) is checked too: a full disk or a closed pipe is
+ * an I/O failure, not success. */
 int main(int argc, char **argv) {
-    const int ranks = launched_ranks();
-    if (ranks > 1) {
-        fprintf(stderr, "sandmpm: started as %d MPI ranks, but the program runs on one process (distributed runs are "
-                        "in the library so far: include/sandmpm/sandmpm_mpi.h, issue 19); run it without mpirun\n",
-                ranks);
+    const int ranks = cli_ranks_launched();
+    if (ranks > 1 && refuse_ranks(argc, argv, ranks)) return cli_exit_code(SM_ERR_INVALID);
+    if (!cli_ranks_init(&argc, &argv)) {
+        fprintf(stderr, "sandmpm: MPI could not be started for %d ranks\n", ranks);
         return cli_exit_code(SM_ERR_INVALID);
     }
     int code = dispatch(argc, argv);
@@ -121,5 +125,6 @@ int main(int argc, char **argv) {
         fprintf(stderr, "sandmpm: writing to the standard output failed: %s\n", strerror(errno));
         if (code == cli_exit_code(SM_OK)) code = cli_exit_code(SM_ERR_IO);
     }
+    cli_ranks_finalize();
     return code;
 }

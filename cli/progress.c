@@ -31,9 +31,12 @@ static sm_status progress_begin(sm_sink *s, const sm_run_info *run, char *err, s
     s->state = p;
     sm_world_diagnostics(run->w, &p->start);
     p->prev = p->start;
-    if (!c->quiet)
-        fprintf(stderr, "sandmpm: %s (%s), %zu particles, %d frames at %g fps -> %s/\n", c->scene_label, c->quality,
-                p->start.particles, run->frames, run->fps, run->out_dir);
+    if (c->quiet) return SM_OK;
+    fprintf(stderr, "sandmpm: %s (%s), %zu particles, %d frames at %g fps", c->scene_label, c->quality,
+            p->start.particles, run->frames, run->fps);
+    if (c->ranks > 1 && c->threads > 0) fprintf(stderr, ", %d ranks × %d threads", c->ranks, c->threads);
+    else if (c->ranks > 1) fprintf(stderr, ", %d ranks (threads chosen per step in each)", c->ranks);
+    fprintf(stderr, " -> %s/\n", run->out_dir);
     return SM_OK;
 }
 

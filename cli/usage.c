@@ -46,7 +46,9 @@ void cli_usage_run(FILE *f) {
                "Ctrl-C (SIGINT) or SIGTERM stops after the frame in progress and says which frames are\n"
                "complete; a second one stops at once (the files being written are removed). Temporaries\n"
                "that a killed run left are removed by the next run in the folder. A write that fails (a\n"
-               "full disk, no permission) stops the run with exit code 4, the file and the reason.\n");
+               "full disk, no permission) stops the run with exit code 4, the file and the reason.\n\n"
+               "Under mpirun -np N (a build with MPI): the run spreads over N ranks, --threads each; rank 0\n"
+               "writes the folder, the frame files are those of one process (README, \"Distributed runs\").\n");
 }
 
 void cli_usage_info(FILE *f) {

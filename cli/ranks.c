@@ -1,0 +1,202 @@
+/* `sandmpm run` across MPI ranks (mpirun -np N sandmpm run SCENE, N > 1): every rank loads and
+ * builds the same scene and advances its share of the world (include/sandmpm/sandmpm_mpi.h); rank
+ * 0 alone touches the output folder. At each frame the ranks save the world collectively into
+ * rank 0's memory (every particle in id order: the one-rank checkpoint format) and rank 0 restores
+ * it into the view, a second world it built from the scene (so that mesh colliders, whose fields a
+ * checkpoint does not hold, and motion functions are there), which its sinks write as a one-process run's sinks write
+ * theirs: the frame files are the same bytes on any number of ranks. The other ranks print
+ * nothing (their standard output and error go to /dev/null once MPI is up): every failure is
+ * agreed on, and rank 0 reports it.
+ *
+ * Without MPI (a build with SM_MPI off) these are the one-process answers, and a start under
+ * mpirun with several ranks is refused. */
+#define _POSIX_C_SOURCE 200809L
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli/cli.h"
+#include "sandmpm/config.h"
+
+int cli_ranks_launched(void) {
+    const char *v = getenv("OMPI_COMM_WORLD_SIZE");
+    if (!v) v = getenv("PMI_SIZE");
+    const int n = v ? atoi(v) : 1;
+    return n > 1 ? n : 1;
+}
+
+#if SM_HAVE_MPI
+#include "sandmpm/sandmpm_mpi.h"
+
+static int mpi_up;
+
+int cli_ranks_init(int *argc, char ***argv) {
+    if (cli_ranks_launched() <= 1) return 1;
+    int provided;
+    if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) return 0;
+    mpi_up = 1;
+    int rank;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    if (rank != 0 && (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr))) return 0;
+    return 1;
+}
+
+void cli_ranks_finalize(void) {
+    if (mpi_up) MPI_Finalize();
+    mpi_up = 0;
+}
+
+int cli_rank(void) {
+    int r = 0;
+    if (mpi_up) MPI_Comm_rank(MPI_COMM_WORLD, &r);
+    return r;
+}
+
+int cli_ranks_count(void) {
+    int n = 1;
+    if (mpi_up) MPI_Comm_size(MPI_COMM_WORLD, &n);
+    return n;
+}
+
+sm_status cli_ranks_share_status(sm_status st) {
+    int code = (int)st;
+    if (mpi_up) MPI_Bcast(&code, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    return (sm_status)code;
+}
+
+sm_status cli_ranks_worst(sm_status st) {
+    int code = (int)st, worst = code;
+    if (mpi_up) MPI_Allreduce(&code, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    return (sm_status)worst;
+}
+
+int cli_ranks_share_ints(int *v, int n) {
+    if (mpi_up) MPI_Bcast(v, n, MPI_INT, 0, MPI_COMM_WORLD);
+    return 1;
+}
+
+int cli_ranks_share_bytes(unsigned char **data, size_t *len) {
+    if (!mpi_up) return 1;
+    unsigned long long n = *len;
+    MPI_Bcast(&n, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+    int ok = 1, all = 0;
+    if (cli_rank() != 0) {
+        *len = (size_t)n;
+        *data = malloc(n ? (size_t)n : 1);
+        ok = *data != NULL;
+    }
+    MPI_Allreduce(&ok, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    if (!all) return 0;
+    for (unsigned long long at = 0; at < n;) { /* MPI counts are int: 1 GiB pieces */
+        const int piece = (int)(n - at < (1ull << 30) ? n - at : (1ull << 30));
+        MPI_Bcast(*data + at, piece, MPI_BYTE, 0, MPI_COMM_WORLD);
+        at += (unsigned long long)piece;
+    }
+    return 1;
+}
+
+/* ---- The frame loop's hooks (app/run.h: sm_run_ranks) ----------------------------------------- */
+
+typedef struct mem_stream {
+    unsigned char *data;
+    size_t len, cap;
+} mem_stream;
+
+static int mem_write(void *user, const void *data, size_t len) {
+    mem_stream *m = user;
+    if (m->len + len > m->cap) {
+        size_t cap = m->cap ? m->cap : 1 << 20;
+        while (cap < m->len + len) cap *= 2;
+        unsigned char *p = realloc(m->data, cap);
+        if (!p) return 1;
+        m->data = p;
+        m->cap = cap;
+    }
+    memcpy(m->data + m->len, data, len);
+    m->len += len;
+    return 0;
+}
+
+/* The whole world into the view on rank 0 (collective), and each rank's particle count. */
+static sm_status gather(void *ctx, const sm_world *w, sm_world **view, char *err, size_t errlen) {
+    cli_ranks *r = ctx;
+    mem_stream m = {r->stream, 0, r->stream_cap};
+    sm_status st = sm_world_save(w, mem_write, &m);
+    r->stream = m.data;
+    r->stream_cap = m.cap;
+    sm_dist_stats ds;
+    sm_world_dist_stats(w, &ds);
+    unsigned long long mine = ds.particles;
+    MPI_Gather(&mine, 1, MPI_UNSIGNED_LONG_LONG, r->shares, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+    if (st != SM_OK) snprintf(err, errlen, "gathering the ranks' particles on rank 0 failed (out of memory)");
+    else if (r->rank == 0 && (st = sm_world_restore(r->view, m.data, m.len)) != SM_OK)
+        snprintf(err, errlen, "the gathered world: %s", sm_world_errmsg(r->view));
+    st = cli_ranks_share_status(st);
+    *view = r->rank == 0 ? r->view : NULL;
+    return st;
+}
+
+static sm_status agree(void *ctx, sm_status st, char *err, size_t errlen) {
+    (void)ctx;
+    sm_status all = cli_ranks_share_status(st);
+    if (all != SM_OK && st == SM_OK) snprintf(err, errlen, "rank 0 failed");
+    return all;
+}
+
+static int any(void *ctx, int flag) {
+    (void)ctx;
+    int all = 0;
+    MPI_Allreduce(&flag, &all, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    return all;
+}
+
+sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, char *err, size_t errlen) {
+    memset(r, 0, sizeof *r);
+    r->count = cli_ranks_count();
+    r->rank = cli_rank();
+    if (r->count <= 1) return SM_OK;
+    r->view = r->rank == 0 ? view : NULL;
+    r->shares = calloc((size_t)r->count, sizeof *r->shares);
+    sm_status st = r->shares ? SM_OK : SM_ERR_NOMEM;
+    if (st == SM_OK && (st = sm_world_distribute(w, MPI_COMM_WORLD)) != SM_OK)
+        snprintf(err, errlen, "%s", sm_world_errmsg(w));
+    else if (st != SM_OK)
+        snprintf(err, errlen, "out of memory");
+    r->hooks = (sm_run_ranks){r, r->rank == 0, gather, agree, any};
+    return st;
+}
+
+void cli_ranks_close(cli_ranks *r) {
+    free(r->stream);
+    free(r->shares);
+    memset(r, 0, sizeof *r);
+}
+
+#else /* one process */
+
+int cli_ranks_init(int *argc, char ***argv) {
+    (void)argc, (void)argv;
+    return cli_ranks_launched() <= 1;
+}
+void cli_ranks_finalize(void) {}
+int cli_rank(void) { return 0; }
+int cli_ranks_count(void) { return 1; }
+sm_status cli_ranks_share_status(sm_status st) { return st; }
+sm_status cli_ranks_worst(sm_status st) { return st; }
+int cli_ranks_share_ints(int *v, int n) {
+    (void)v, (void)n;
+    return 1;
+}
+int cli_ranks_share_bytes(unsigned char **data, size_t *len) {
+    (void)data, (void)len;
+    return 1;
+}
+sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, char *err, size_t errlen) {
+    (void)w, (void)view, (void)err, (void)errlen;
+    memset(r, 0, sizeof *r);
+    r->count = 1;
+    return SM_OK;
+}
+void cli_ranks_close(cli_ranks *r) { memset(r, 0, sizeof *r); }
+
+#endif

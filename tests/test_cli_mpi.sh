@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# `sandmpm run` under mpirun (issue 19; CTest test_cli_mpi, built with MPI):
+# test_cli_mpi.sh SANDMPM SOURCE_DIR MPIEXEC.
+#  - the default scene, an emitter scene and a mesh-collider scene on 2 and 3 ranks (1 and 2
+#    threads) write frame files (PLY, VTP) byte for byte those of a run on one process;
+#  - the banner says the ranks and threads; the manifest records them and each rank's particles,
+#    which add up to the run's;
+#  - a run on 3 ranks with checkpoints resumes on 2 ranks and ends with the one-process frames;
+#  - an implicit scene and a command other than run are refused with exit code 2, nothing written.
+set -u
+BIN=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
+SRC=$2
+MPIEXEC=$3
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+export SANDMPM_MESH_CACHE="$TMP/mesh-cache"
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+pass=0
+fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
+ranks() { # N args...: sandmpm on N ranks
+    local n=$1; shift
+    "$MPIEXEC" -np "$n" --oversubscribe "$BIN" "$@"
+}
+same_frames() { # reference-dir dir what
+    local n=0 f
+    for f in "$1"/frame_*.ply "$1"/frame_*.vtp; do
+        n=$((n + 1))
+        cmp -s "$f" "$2/$(basename "$f")" || { bad "$3: $(basename "$f") differs from the one-process run"; return; }
+    done
+    [ "$n" -ge 4 ] && ok || bad "$3: only $n frame files"
+}
+manifest_total() { # dir: the sum of rank_particles
+    awk '/^rank_particles/ { for (i = 2; i <= NF; i++) s += $i } END { print s + 0 }' "$1/run_manifest.txt"
+}
+ply_vertices() { # file
+    sed -n 's/^element vertex //p' "$1" | head -1
+}
+
+for scene in default "$SRC/scenes/bowl_pour.lua" "$SRC/scenes/shovel_mesh.lua"; do
+    name=$(basename "$scene" .lua)
+    args=(run --quality test --frames 3 --checkpoint-every 0)
+    [ "$scene" = default ] || args=(run "$scene" --quality test --frames 3 --checkpoint-every 0)
+    "$BIN" "${args[@]}" --out "$TMP/$name-1" -q 2>"$TMP/err" || bad "$name: one process failed: $(cat "$TMP/err")"
+    for n in 2 3; do
+        th=$((n == 2 ? 2 : 1))
+        out=$TMP/$name-$n
+        if ranks "$n" "${args[@]}" --out "$out" --threads "$th" >"$TMP/out" 2>"$TMP/err"; then ok; else
+            bad "$name on $n ranks: exit $?: $(head -c 600 "$TMP/err")"
+            continue
+        fi
+        same_frames "$TMP/$name-1" "$out" "$name on $n ranks x $th threads"
+        grep -qF "$n ranks × $th threads" "$TMP/err" && ok || bad "$name: banner without '$n ranks × $th threads': $(head -2 "$TMP/err")"
+        grep -qx "ranks $n" "$out/run_manifest.txt" && grep -qx "threads_per_rank $th" "$out/run_manifest.txt" && ok ||
+            bad "$name: the manifest does not record $n ranks x $th threads"
+        total=$(manifest_total "$out")
+        want=$(ply_vertices "$out/frame_0003.ply")
+        [ "$total" = "$want" ] && ok || bad "$name: rank_particles add up to $total, the last frame has $want particles"
+        [ "$(grep -c '^rank_particles' "$out/run_manifest.txt")" = 1 ] &&
+            [ "$(awk '/^rank_particles/ { print NF - 1 }' "$out/run_manifest.txt")" = "$n" ] && ok ||
+            bad "$name: rank_particles does not list $n ranks"
+    done
+done
+
+# Written on 3 ranks, resumed on 2, to the one-process run's last frames.
+S=$SRC/scenes/shovel.lua
+"$BIN" run "$S" --quality test --frames 4 --checkpoint-every 0 --out "$TMP/resume-1" -q
+ranks 3 run "$S" --quality test --frames 2 --checkpoint-every 1 --out "$TMP/resume" -q 2>"$TMP/err" ||
+    bad "shovel on 3 ranks: $(cat "$TMP/err")"
+if ranks 2 run "$S" --quality test --frames 4 --checkpoint-every 1 --out "$TMP/resume" --resume 2>"$TMP/err"; then
+    grep -qF "resuming from" "$TMP/err" && ok || bad "resume on 2 ranks: no 'resuming from': $(head -3 "$TMP/err")"
+    same_frames "$TMP/resume-1" "$TMP/resume" "written on 3 ranks, resumed on 2"
+    [ -f "$TMP/resume/checkpoints/ckpt_00000004.smc" ] && ok || bad "resume on 2 ranks: no checkpoint of frame 4"
+else
+    bad "resume on 2 ranks: exit $?: $(head -c 600 "$TMP/err")"
+fi
+
+# Refusals: exit code 2 from every rank, a message, nothing written.
+ranks 2 run "$SRC/scenes/castle.lua" --quality test --frames 1 --out "$TMP/implicit" >"$TMP/out" 2>"$TMP/err"
+code=$?
+[ "$code" -ne 0 ] && grep -qF "implicit integrator" "$TMP/err" && [ ! -e "$TMP/implicit" ] && ok ||
+    bad "implicit scene on 2 ranks: exit $code, folder $( [ -e "$TMP/implicit" ] && echo made || echo absent): $(head -c 400 "$TMP/err")"
+ranks 2 info >"$TMP/out" 2>"$TMP/err"
+code=$?
+[ "$code" -ne 0 ] && grep -qF "only \`sandmpm run\` runs across ranks" "$TMP/err" && ok ||
+    bad "info on 2 ranks: exit $code: $(head -c 400 "$TMP/err")"
+
+echo "test_cli_mpi: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]

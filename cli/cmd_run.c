@@ -217,9 +217,12 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
     if (*stopped && res.frames_written > 0 && whole) {
         char path[SM_PATH_MAX], e2[SM_MSG_MAX];
         sm_status cs = sm_checkpoint_write(out, whole, res.frames_written - 1, hash, a->keep, path, sizeof path, e2, sizeof e2);
+        char launcher[32] = "";
+        if (ranks->count > 1) snprintf(launcher, sizeof launcher, "mpirun -np %d ", ranks->count);
         if (cs == SM_OK)
-            fprintf(stderr, "sandmpm run: state at frame %d kept in %s; continue with: sandmpm run %s --out %s --resume\n",
-                    res.frames_written - 1, path, a->so.scene ? a->so.scene : "", out);
+            fprintf(stderr, "sandmpm run: state at frame %d kept in %s; continue with: %ssandmpm run %s%s--out %s --resume%s\n",
+                    res.frames_written - 1, path, launcher, a->so.scene ? a->so.scene : "", a->so.scene ? " " : "", out,
+                    ranks->count > 1 ? " (on any number of ranks)" : "");
         else
             fprintf(stderr, "sandmpm run: could not write the checkpoint: %s\n", e2);
     }

@@ -47,41 +47,6 @@ void cli_usage_bench(FILE *f);
  * the build has none. */
 #ifndef SM_BENCH_SIBLING
 #define SM_BENCH_SIBLING ""
-/* ------------------------------------------------------------------------------------------ */
-/* ranks.c: `sandmpm run` under mpirun with several ranks (a build with MPI). Rank 0 writes, every
- * rank computes its share; on one process every call is the one-process answer. */
-
-/* The ranks mpirun started (OpenMPI's or PMI's environment), 1 outside mpirun. */
-int cli_ranks_launched(void);
-/* MPI started if launched with several ranks (then the other ranks' stdout and stderr go to
- * /dev/null); 0 if that failed, or if several ranks were launched and the build has no MPI. */
-int cli_ranks_init(int *argc, char ***argv);
-void cli_ranks_finalize(void);
-int cli_rank(void);        /* 0 on one process */
-int cli_ranks_count(void); /* 1 on one process */
-/* Rank 0's status, ints, bytes on every rank (collective; *data malloc'd on the others; 0 if out
- * of memory on any rank). */
-sm_status cli_ranks_share_status(sm_status st);
-/* A failure on any rank on every rank (the largest status code). */
-sm_status cli_ranks_worst(sm_status st);
-int cli_ranks_share_ints(int *v, int n);
-int cli_ranks_share_bytes(unsigned char **data, size_t *len);
-
-typedef struct cli_ranks {
-    int count, rank;
-    sm_run_ranks hooks;           /* for sm_run_config.ranks when count > 1 */
-    sm_world *view;               /* rank 0: the whole world at the last frame gathered (the
-                                     caller's, built like the run's world) */
-    unsigned long long *shares;   /* rank 0: each rank's particles at the last frame gathered */
-    unsigned char *stream;        /* the gathered checkpoint stream's buffer */
-    size_t stream_cap;
-} cli_ranks;
-/* With several ranks: w distributed over them (sm_world_distribute; collective) and the hooks
- * set; view (rank 0; NULL elsewhere): a world built like w, which each frame is gathered into.
- * SM_OK, or the failure with its message. */
-sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, char *err, size_t errlen);
-void cli_ranks_close(cli_ranks *r);
-
 #endif
 
 /* ------------------------------------------------------------------------------------------ */

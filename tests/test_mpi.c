@@ -9,9 +9,13 @@
  *    2 and 3 ranks, at least twice on 4); every rank holds particles at the start (the cuts balance them);
  *  - the state does change (the hash after the run differs from the start's);
  *  - a checkpoint written half way on N ranks (collective; rank 0 writes it) resumes on N - 1
- *    ranks (1 when N = 1) to the same final hash. */
+ *    ranks (1 when N = 1) to the same final hash;
+ *  - messages in pieces (dist/message.c; a rank's share can pass MPI's INT_MAX bytes): the 2D
+ *    run sends every message, the checkpoint's gather included, in pieces of 997 bytes (prime: no
+ *    piece boundary falls between particles), and rank 0's last message is several pieces. */
 #include "test_util.h"
 #include "sandmpm/sandmpm_mpi.h"
+#include "dist/dist.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -185,6 +189,8 @@ static void run(int dim) {
     n0 /= ranks;
     m0 /= ranks;
     CHECK(sm_world_distribute(w, MPI_COMM_WORLD) == SM_OK);
+    const size_t piece = dim == 2 ? 997 : 0; /* 0: the default, SM_DIST_PIECE */
+    sm_dist_set_piece_bytes(w, piece);
     sm_particles_view pv;
     sm_world_particles(w, &pv);
     int empty = pv.n == 0, any_empty = 0;
@@ -215,6 +221,7 @@ static void run(int dim) {
     sm_dist_stats ds;
     CHECK(sm_world_dist_stats(w, &ds) == 1);
     CHECK(ds.ranks == ranks && ds.rank == rank);
+    if (piece && ranks >= 2) CHECK(ds.bytes_sent > 3 * piece); /* rank 0 sent a message of several pieces */
     if (rank == 0)
         printf("%dD on %d ranks: id hash %016llx (one rank, 2 threads: %016llx), the ball's owner changed %d times, "
                "rank 0: %zu particles, %zu ghosts and %zu migrating sent in the last step (%zu bytes, %zu messages), "

@@ -179,40 +179,42 @@ void sm_dist_adopt(sm_world *w, size_t first) {
     d->owned = j;
 }
 
-/* Every rank's particles gathered into *P on rank 0 (collective; P empty elsewhere); 0 when out of
- * memory on some rank (every rank returns the same). */
+/* Every rank's particles gathered into *P on rank 0 (collective; P empty elsewhere), in pieces
+ * (message.c: a rank's share can pass INT_MAX bytes); 0 when out of memory on some rank (every
+ * rank returns the same). */
 static int gather_particles(const sm_world *w, sm_particles *P) {
-    const sm_dist *d = w->dist;
-    const size_t ps = sm_particles_packed_size(d->dim);
-    const int n = (int)d->owned;
+    sm_dist *d = w->dist;
+    const size_t ps = sm_particles_packed_size(d->dim), n = d->owned;
     memset(P, 0, sizeof *P);
-    unsigned char *mine = malloc((size_t)(n ? n : 1) * ps);
-    int *counts = malloc(2 * (size_t)d->size * sizeof *counts);
-    int ok = mine && counts, all_ok = 0;
+    uint64_t mine_bytes = (uint64_t)n * ps, *bytes = malloc((size_t)d->size * sizeof *bytes);
+    unsigned char *mine = malloc(n ? n * ps : 1);
+    int ok = mine && bytes, all_ok = 0;
     MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
     if (all_ok) {
-        for (int i = 0; i < n; i++) sm_particles_pack(&w->p, d->dim, (size_t)i, mine + (size_t)i * ps);
-        const int bytes = (int)((size_t)n * ps);
-        MPI_Gather(&bytes, 1, MPI_INT, counts, 1, MPI_INT, 0, d->comm);
-        long total = 0;
+        for (size_t i = 0; i < n; i++) sm_particles_pack(&w->p, d->dim, i, mine + i * ps);
+        MPI_Gather(&mine_bytes, 1, MPI_UINT64_T, bytes, 1, MPI_UINT64_T, 0, d->comm);
+        size_t total = 0, nreq = 0;
         if (d->rank == 0)
-            for (int r = 0; r < d->size; r++) {
-                counts[d->size + r] = (int)total;
-                total += counts[r];
-            }
-        unsigned char *all = d->rank == 0 ? malloc((size_t)(total ? total : 1)) : NULL;
-        MPI_Gatherv(mine, bytes, MPI_BYTE, all, counts, counts + d->size, MPI_BYTE, 0, d->comm);
-        ok = d->rank != 0 || all;
-        const size_t np = (size_t)total / ps;
-        if (d->rank == 0 && all && (ok = sm_particles_reserve(P, d->dim, np) == SM_OK)) {
-            for (size_t i = 0; i < np; i++) sm_particles_unpack(P, d->dim, i, all + i * ps);
-            P->n = np;
+            for (int r = 0; r < d->size; r++) total += (size_t)bytes[r], nreq += sm_dist_request_count(d, (size_t)bytes[r]);
+        else nreq = sm_dist_request_count(d, n * ps);
+        unsigned char *all = d->rank == 0 ? malloc(total ? total : 1) : NULL;
+        ok = (d->rank != 0 || all) && sm_dist_reserve_requests(d, nreq);
+        MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
+        if (all_ok && d->rank == 0) {
+            size_t at = bytes[0], k = 0;
+            memcpy(all, mine, n * ps);
+            for (int r = 1; r < d->size; r++) k += sm_dist_irecv(d, all + at, (size_t)bytes[r], r, 20, k), at += (size_t)bytes[r];
+            sm_dist_wait(d, k);
+        } else if (all_ok) sm_dist_wait(d, sm_dist_isend(d, mine, n * ps, 0, 20, 0));
+        if (all_ok && d->rank == 0 && (ok = sm_particles_reserve(P, d->dim, total / ps) == SM_OK)) {
+            for (size_t i = 0; i < total / ps; i++) sm_particles_unpack(P, d->dim, i, all + i * ps);
+            P->n = total / ps;
         }
         free(all);
-        MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
+        if (all_ok) MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
     }
     free(mine);
-    free(counts);
+    free(bytes);
     return all_ok;
 }
 
@@ -299,6 +301,8 @@ static sm_dist *dist_create(const sm_world *w, MPI_Comm comm) {
     d->ghost_out = calloc(P, sizeof *d->ghost_out);
     d->counts = calloc(4 * P, sizeof *d->counts);
     d->req = calloc(2 * P, sizeof *d->req);
+    d->req_cap = 2 * P;
+    d->piece = SM_DIST_PIECE;
     if (!d->cuts || !d->own_out || !d->ghost_out || !d->counts || !d->req) {
         sm_dist_free(d);
         return NULL;

@@ -30,6 +30,8 @@ typedef struct sm_dist sm_dist;
  * threshold, and re-cutting every step would only cost time). */
 #define SM_DIST_IMBALANCE 1.10
 #define SM_DIST_RECUT_STEPS 25
+/* The largest piece of one MPI message, bytes: MPI counts are int (message.c). */
+#define SM_DIST_PIECE ((size_t)1 << 30)
 
 #if SM_HAVE_MPI
 /* Migration, re-balancing and ghosts (collective). */
@@ -52,6 +54,9 @@ uint64_t sm_dist_id_hash(const struct sm_world *w);
  * whole run, in id order, which any number of ranks can resume). */
 sm_status sm_dist_save(const struct sm_world *w, sm_write_fn write, void *user);
 void sm_dist_free(sm_dist *d);
+/* Sets the piece size of w's messages (tests: small pieces exercise the splitting; 0 or more than
+ * SM_DIST_PIECE restores SM_DIST_PIECE). */
+void sm_dist_set_piece_bytes(struct sm_world *w, size_t bytes);
 #else
 static inline sm_status sm_dist_exchange(struct sm_world *w, const sm_step_ctx *c) { (void)w; (void)c; return SM_OK; }
 static inline void sm_dist_end_step(struct sm_world *w) { (void)w; }

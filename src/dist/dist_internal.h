@@ -25,7 +25,9 @@ struct sm_dist {
     sm_dist_buf *ghost_out;   /* per rank: ghost copies for it (this rank's own ghosts too) */
     sm_dist_buf in;           /* received particles, rank after rank */
     int *counts;              /* 2 per rank sent (migrating, ghosts), then 2 per rank received */
-    MPI_Request *req;         /* 2 per rank */
+    MPI_Request *req;         /* req_cap requests: one per piece of a message (message.c) */
+    size_t req_cap;
+    size_t piece;             /* the largest piece of a message, bytes (SM_DIST_PIECE) */
     uint64_t *hist;           /* (Morton code, particles) pairs of the blocks, for a re-cut */
     size_t hist_cap;
     uint32_t *scratch;        /* the owned particles' order for a reorder */
@@ -33,6 +35,16 @@ struct sm_dist {
     int since_recut;          /* steps since the last cut */
     sm_dist_stats stats;
 };
+
+/* Messages of any size (message.c): sm_dist_isend / sm_dist_irecv post `bytes` in pieces of at
+ * most d->piece bytes from request d->req + at on and return how many they posted
+ * (sm_dist_request_count(d, bytes), which sm_dist_reserve_requests must have room for);
+ * sm_dist_wait waits for the first n. */
+int sm_dist_reserve_requests(sm_dist *d, size_t n);
+size_t sm_dist_request_count(const sm_dist *d, size_t bytes);
+size_t sm_dist_isend(sm_dist *d, const unsigned char *buf, size_t bytes, int peer, int tag, size_t at);
+size_t sm_dist_irecv(sm_dist *d, unsigned char *buf, size_t bytes, int peer, int tag, size_t at);
+void sm_dist_wait(sm_dist *d, size_t n);
 
 /* Morton code of block coordinates (21 bits each; z ignored in 2D). */
 uint64_t sm_dist_morton(int dim, const int b[3]);

@@ -94,31 +94,39 @@ static int send_receive(sm_dist *d, size_t ps) {
     MPI_Alltoall(sent, 2, MPI_INT, recv, 2, MPI_INT, d->comm);
     size_t total = 0;
     for (int r = 0; r < P; r++) total += (size_t)(recv[2 * r] + recv[2 * r + 1]) * ps;
+    /* Migrating then ghosts in one message per peer: the ghosts appended to the migrating buffer. */
     int ok = sm_dist_buf_reserve(&d->in, total + 1), all_ok = 0;
+    size_t nreq = 0;
+    for (int r = 0; r < P; r++) {
+        if (r == d->rank) continue;
+        sm_dist_buf *o = &d->own_out[r];
+        ok = ok && sm_dist_buf_reserve(o, o->len + d->ghost_out[r].len);
+        nreq += sm_dist_request_count(d, (size_t)(recv[2 * r] + recv[2 * r + 1]) * ps) +
+                sm_dist_request_count(d, o->len + d->ghost_out[r].len);
+    }
+    ok = ok && sm_dist_reserve_requests(d, nreq);
     MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
     if (!all_ok) return 0;
-    int nreq = 0;
+    nreq = 0;
     size_t at = 0;
     for (int r = 0; r < P; r++) {
         const size_t bytes = (size_t)(recv[2 * r] + recv[2 * r + 1]) * ps;
-        if (bytes) MPI_Irecv(d->in.data + at, (int)bytes, MPI_BYTE, r, 19, d->comm, &d->req[nreq++]);
+        nreq += sm_dist_irecv(d, d->in.data + at, bytes, r, 19, nreq);
         at += bytes;
     }
     d->in.len = at;
     d->stats.bytes_sent = d->stats.messages_sent = 0;
     for (int r = 0; r < P; r++) {
         if (r == d->rank || !(sent[2 * r] + sent[2 * r + 1])) continue;
-        /* Migrating then ghosts in one message: the ghosts appended to the migrating buffer. */
         sm_dist_buf *o = &d->own_out[r];
-        if (!sm_dist_buf_reserve(o, o->len + d->ghost_out[r].len)) return 0;
         memcpy(o->data + o->len, d->ghost_out[r].data, d->ghost_out[r].len);
         o->len += d->ghost_out[r].len;
-        MPI_Isend(o->data, (int)o->len, MPI_BYTE, r, 19, d->comm, &d->req[nreq++]);
+        nreq += sm_dist_isend(d, o->data, o->len, r, 19, nreq);
         d->stats.bytes_sent += o->len;
         d->stats.messages_sent++;
         d->stats.ghosts_sent += (size_t)sent[2 * r + 1];
     }
-    MPI_Waitall(nreq, d->req, MPI_STATUSES_IGNORE);
+    sm_dist_wait(d, nreq);
     return 1;
 }
 

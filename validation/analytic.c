@@ -126,13 +126,73 @@ static void incline(int quick) {
             }
 }
 
-/* Elastic column at `cells` cells over its height: errors of the time-averaged sigma_yy and ratio. */
-static void column_run(int cells, int shifted, double *err_yy, double *ratio, double *err_ratio, size_t *np,
-                       int *unconverged) {
+/* The elastic column's results (sm_validate column). */
+typedef struct column_result {
+    size_t particles;
+    double err_bins;   /* RMS over bins of dx of the mean sigma_yy - exact, over the RMS of the exact */
+    double err_smooth; /* the same at the interior node rows, sigma_yy smoothed with the kernel */
+    double err_mean;   /* the volume mean of sigma_yy against -rho g H / 2 */
+    double err_slope;  /* the least-squares slope of the bins' sigma_yy over [0.1 H, 0.9 H] against rho g */
+    double ratio, err_ratio;
+} column_result;
+
+/* Cauchy sigma_yy and sigma_xx of a 2D particle from F^E (3.70), and J. */
+static void column_stress(const sm_real *F, double mu_l, double la, double *syy, double *sxx, double *J) {
+    sm_real U[4], V[4], s[2];
+    sm_svd2(F, U, s, V);
+    const double l0 = log((double)s[0]), l1 = log((double)s[1]);
+    const double t0 = 2 * mu_l * l0 + la * (l0 + l1), t1 = 2 * mu_l * l1 + la * (l0 + l1);
+    *J = (double)s[0] * (double)s[1];
+    *syy = ((double)U[2] * U[2] * t0 + (double)U[3] * U[3] * t1) / *J;
+    *sxx = ((double)U[0] * U[0] * t0 + (double)U[1] * U[1] * t1) / *J;
+}
+
+/* Adds a particle's sigma_yy at y to the node rows its quadratic kernel reaches (rows j dx). */
+static void column_smooth_add(double *rows, int nrows, double y, double dx, double syy) {
+    const double X = y / dx;
+    const int j0 = (int)floor(X - 0.5);
+    for (int k = 0; k < 3; k++) {
+        const int j = j0 + k;
+        const double r = fabs(X - j);
+        const double wq = r < 0.5 ? 0.75 - r * r : (r < 1.5 ? 0.5 * (1.5 - r) * (1.5 - r) : 0);
+        if (j >= 0 && j < nrows) rows[2 * j] += wq * syy, rows[2 * j + 1] += wq;
+    }
+}
+
+/* The errors of column_result from the accumulated sums. */
+static void column_errors(const double *acc, const double *rows, int nb, int cells, double H, double dx, double rho,
+                          double nu, double vol_syy, double vol, column_result *r) {
+    double se = 0, sx = 0, rs = 0, re = 0, S0 = 0, S1 = 0, S2 = 0, T0 = 0, T1 = 0;
+    int nr = 0;
+    const double rexact = nu / (1 - nu);
+    for (int b = 0; b < nb; b++) {
+        if (acc[4 * b + 3] == 0) continue;
+        const double n = acc[4 * b + 3], syy = acc[4 * b] / n, sxx = acc[4 * b + 1] / n, y = acc[4 * b + 2] / n;
+        const double ex = -rho * G * (H - y);
+        se += (syy - ex) * (syy - ex), sx += ex * ex;
+        if (y < 0.8 * H) rs += sxx / syy, re += (sxx / syy - rexact) * (sxx / syy - rexact), nr++;
+        if (y >= 0.1 * H && y <= 0.9 * H) S0 += 1, S1 += y, S2 += y * y, T0 += syy, T1 += syy * y;
+    }
+    r->err_bins = sqrt(se / sx);
+    r->ratio = rs / nr;
+    r->err_ratio = sqrt(re / nr) / rexact;
+    r->err_slope = (S0 * T1 - S1 * T0) / (S0 * S2 - S1 * S1) / (rho * G) - 1;
+    r->err_mean = vol_syy / vol / (-rho * G * H / 2) - 1;
+    double e2 = 0, x2 = 0; /* rows 2 .. cells - 2: the kernel's whole support is inside */
+    for (int j = 2; j <= cells - 2; j++) {
+        const double ex = -rho * G * (H - j * dx), d = rows[2 * j] / rows[2 * j + 1] - ex;
+        e2 += d * d, x2 += ex * ex;
+    }
+    r->err_smooth = sqrt(e2 / x2);
+}
+
+/* Elastic column at `cells` cells over its height (transfer: APIC, or PIC, which brings it to rest). */
+static void column_run(int cells, int shifted, sm_transfer transfer, column_result *res) {
     const double H = 1.0, W = 0.25, dx = H / cells, nu = 0.3, E = 1e7, rho = 1000;
     sm_world_def def = sm_world_def_default();
     def.dim = 2;
     def.dx = dx;
+    def.transfer = transfer;
     def.domain_min[0] = def.domain_min[1] = -4 * dx;
     def.domain_max[0] = W + 4 * dx;
     def.domain_max[1] = H + 4 * dx;
@@ -146,8 +206,7 @@ static void column_run(int cells, int shifted, double *err_yy, double *ratio, do
     m.density = rho, m.youngs_modulus = E, m.poisson_ratio = nu;
     int mat = -1;
     if (sm_world_add_material(w, &m, &mat) != SM_OK) fail("material", w);
-    /* shifted: the walls 1e-6 dx into the column, so that the grid nodes on the column's faces are
-     * inside the slip colliders (a slip collider acts on nodes with phi < 0 only) */
+    /* shifted: the walls 1e-6 dx into the column (the nodes on the column's faces inside them) */
     const double e = shifted ? 1e-6 * dx : 0;
     const double pts[3][3] = {{0, e, 0}, {e, 0, 0}, {W - e, 0, 0}}, nrm[3][3] = {{0, 1, 0}, {1, 0, 0}, {-1, 0, 0}};
     for (int i = 0; i < 3; i++) {
@@ -171,56 +230,44 @@ static void column_run(int cells, int shifted, double *err_yy, double *ratio, do
     const double c = sqrt((la + 2 * mu_l) / rho), T1 = 4 * H / c, t0 = 0.1;
     const int nb = cells + 4, ns = 8 * 25;
     double *acc = calloc((size_t)nb * 4, sizeof *acc); /* per y-bin: sum syy, sum sxx, sum y, count */
-    if (!acc) exit(5);
+    double *rows = calloc((size_t)nb * 2, sizeof *rows); /* per node row: sum w syy, sum w */
+    if (!acc || !rows) exit(5);
+    double vol_syy = 0, vol = 0; /* sum J syy, sum J: particle volumes are V0 J */
     for (int k = 0; k < ns; k++) {
         if (sm_world_advance(w, t0 + k * T1 / 25) != SM_OK) fail("advance", w);
         sm_particles_view pv;
         sm_world_particles(w, &pv);
         for (size_t i = 0; i < pv.n; i++) {
-            sm_real U[4], V[4], s[2];
-            sm_svd2(pv.F + 4 * i, U, s, V);
-            double l0 = log((double)s[0]), l1 = log((double)s[1]), J = (double)s[0] * (double)s[1];
-            double t0_ = 2 * mu_l * l0 + la * (l0 + l1), t1_ = 2 * mu_l * l1 + la * (l0 + l1);
-            double y = (double)pv.x[2 * i + 1];
-            int b = (int)floor(y / dx);
+            double syy, sxx, J;
+            column_stress(pv.F + 4 * i, mu_l, la, &syy, &sxx, &J);
+            const double y = (double)pv.x[2 * i + 1];
+            vol_syy += J * syy, vol += J;
+            column_smooth_add(rows, nb, y, dx, syy);
+            const int b = (int)floor(y / dx);
             if (b < 0 || b >= nb) continue;
-            acc[4 * b] += ((double)U[2] * U[2] * t0_ + (double)U[3] * U[3] * t1_) / J;
-            acc[4 * b + 1] += ((double)U[0] * U[0] * t0_ + (double)U[1] * U[1] * t1_) / J;
-            acc[4 * b + 2] += y, acc[4 * b + 3] += 1;
+            acc[4 * b] += syy, acc[4 * b + 1] += sxx, acc[4 * b + 2] += y, acc[4 * b + 3] += 1;
         }
-        *np = pv.n;
+        res->particles = pv.n;
     }
-    *unconverged = 0;
-    double se = 0, sx = 0, rs = 0, re = 0;
-    int nr = 0;
-    const double rexact = nu / (1 - nu);
-    for (int b = 0; b < nb; b++) {
-        if (acc[4 * b + 3] == 0) continue;
-        double n = acc[4 * b + 3], syy = acc[4 * b] / n, sxx = acc[4 * b + 1] / n, y = acc[4 * b + 2] / n;
-        double ex = -rho * G * (H - y);
-        se += (syy - ex) * (syy - ex), sx += ex * ex;
-        if (y < 0.8 * H) rs += sxx / syy, re += (sxx / syy - rexact) * (sxx / syy - rexact), nr++;
-    }
+    column_errors(acc, rows, nb, cells, H, dx, rho, nu, vol_syy, vol, res);
     free(acc);
-    *err_yy = sqrt(se / sx);
-    *ratio = rs / nr;
-    *err_ratio = sqrt(re / nr) / rexact;
+    free(rows);
     sm_world_destroy(w);
 }
 
 static void column(int quick) {
-    printf("walls,cells,dx,particles,err_syy,ratio_mean,ratio_exact,err_ratio\n");
-    const int cells[] = {8, 16, 32};
-    for (int shifted = 1; shifted >= 0; shifted--)
-        for (int i = 0; i < (quick ? 2 : 3); i++) {
-            double e, r, er;
-            size_t np;
-            int unc;
-            column_run(cells[i], shifted, &e, &r, &er, &np, &unc);
-            printf("%s,%d,%g,%zu,%.4g,%.5f,%.5f,%.4g\n", shifted ? "shifted" : "on_grid_lines", cells[i], 1.0 / cells[i], np, e,
-                   r, 0.3 / 0.7, er);
+    printf("walls,transfer,cells,dx,particles,err_syy,err_smooth,err_mean,err_slope,ratio_mean,ratio_exact,err_ratio\n");
+    const int cells[] = {8, 16, 32, 64};
+    /* walls (1 shifted), transfer (0 APIC, 1 PIC), resolutions (the first nres of cells) */
+    const int runs[][3] = {{1, 0, 4}, {0, 0, 4}, {1, 1, 3}};
+    for (int k = 0; k < (quick ? 1 : 3); k++)
+        for (int i = 0; i < (quick ? 2 : runs[k][2]); i++) {
+            column_result r;
+            column_run(cells[i], runs[k][0], runs[k][1] ? SM_TRANSFER_PIC : SM_TRANSFER_APIC, &r);
+            printf("%s,%s,%d,%g,%zu,%.4g,%.4g,%.4g,%.4g,%.5f,%.5f,%.4g\n", runs[k][0] ? "shifted" : "on_grid_lines",
+                   runs[k][1] ? "pic" : "apic", cells[i], 1.0 / cells[i], r.particles, r.err_bins, r.err_smooth,
+                   r.err_mean, r.err_slope, r.ratio, 0.3 / 0.7, r.err_ratio);
             fflush(stdout);
-            (void)unc;
         }
 }
 

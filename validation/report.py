@@ -192,8 +192,9 @@ def plot_column(res, pdir):
     rows = res.get("analytic", {}).get("column", [])
     if not rows:
         return None
-    rows = [r for r in rows if r["walls"] == "shifted"]
-    write_dat(os.path.join(pdir, "column.dat"), rows, [lambda r: r["dx"], lambda r: r["err_syy"], lambda r: r["err_ratio"]])
+    rows = [r for r in rows if r["walls"] == "shifted" and r.get("transfer", "apic") == "apic"]
+    write_dat(os.path.join(pdir, "column.dat"), rows, [lambda r: r["dx"], lambda r: r["err_syy"], lambda r: r["err_ratio"],
+                                                       lambda r: r["err_smooth"], lambda r: abs(r["err_mean"])])
     gnuplot("""set terminal pngcairo size 460,360 font ',9'
 set output 'column.png'
 set logscale xy
@@ -201,7 +202,8 @@ set xlabel 'dx / H'
 set ylabel 'relative error'
 set key bottom right
 set grid
-plot 'column.dat' u 1:2 w lp pt 7 t 'σ_yy (RMS)', 'column.dat' u 1:3 w lp pt 5 t 'σ_xx/σ_yy (RMS)', 2*x w l dt 2 lc rgb 'gray' t 'slope 1'
+plot 'column.dat' u 1:2 w lp pt 7 t 'σ_yy in bins (RMS)', 'column.dat' u 1:4 w lp pt 9 t 'σ_yy smoothed (RMS)', \\
+     'column.dat' u 1:5 w lp pt 11 t '|mean σ_yy|', 'column.dat' u 1:3 w lp pt 5 t 'σ_xx/σ_yy (RMS)', 2*x w l dt 2 lc rgb 'gray' t 'slope 1'
 """, pdir)
     return "column.png"
 

@@ -302,18 +302,44 @@ def analytic(c):
     irows = [[int(r["dim"]), r["setup"], r["mode"], f"{r['theta']:g}", f"{r['mu']:g}", f"{r['max_dt']:g}",
               f"{r['expected']:.4f}", f"{r['measured']:.4f}", f"{r['rel_error']:.2e}"] for r in inc]
     col = an.get("column", [])
-    crows = [[r["walls"].replace("_", " "), int(r["cells"]), int(r["particles"]), f"{r['err_syy']:.3e}",
+    crows = [[r["walls"].replace("_", " "), r["transfer"].upper(), int(r["cells"]), int(r["particles"]),
+              f"{r['err_syy']:.3e}", f"{r['err_smooth']:.3e}", f"{r['err_mean']:+.2e}", f"{r['err_slope']:+.2e}",
               f"{r['ratio_mean']:.4f}", f"{r['ratio_exact']:.4f}", f"{r['err_ratio']:.3e}"] for r in col]
+
+    def order(rows, key):
+        return ", ".join(f"{math.log(rows[i][key] / rows[i + 1][key]) / math.log(rows[i]['dx'] / rows[i + 1]['dx']):.2f}"
+                         for i in range(len(rows) - 1))
     orders = []
     for walls in ("shifted", "on_grid_lines"):
-        cw = [r for r in col if r["walls"] == walls]
+        cw = [r for r in col if r["walls"] == walls and r["transfer"] == "apic"]
         if len(cw) >= 2:
-            o = [math.log(cw[i]["err_syy"] / cw[i + 1]["err_syy"]) / math.log(cw[i]["dx"] / cw[i + 1]["dx"])
-                 for i in range(len(cw) - 1)]
-            o2 = [math.log(cw[i]["err_ratio"] / cw[i + 1]["err_ratio"]) / math.log(cw[i]["dx"] / cw[i + 1]["dx"])
-                  for i in range(len(cw) - 1)]
-            orders.append(f"walls {walls.replace('_', ' ')}: order of the σ_yy error between successive resolutions "
-                          + ", ".join(f"{x:.2f}" for x in o) + "; of the ratio error " + ", ".join(f"{x:.2f}" for x in o2))
+            orders.append(f"walls {walls.replace('_', ' ')}, APIC: order between successive resolutions of the σ_yy "
+                          f"error in bins {order(cw, 'err_syy')}, smoothed {order(cw, 'err_smooth')}; of the ratio "
+                          f"error {order(cw, 'err_ratio')}")
+    apic = [r for r in col if r["transfer"] == "apic"]
+    pic = {int(r["cells"]): r for r in col if r["transfer"] == "pic"}
+    same = [(r, pic[int(r["cells"])]) for r in apic if r["walls"] == "shifted" and int(r["cells"]) in pic]
+    worst_mean = max((abs(r["err_mean"]) for r in apic), default=float("nan"))
+    fine = [r for r in apic if r["walls"] == "shifted"]
+    fine = fine[-1] if fine else None
+    below = [1 - r["ratio_mean"] / r["ratio_exact"] for r in col]
+    ratio_lo, ratio_hi = (min(below), max(below)) if below else (float("nan"), float("nan"))
+    colnote = (f"""The column holds its weight as a whole: the volume mean of σ_yy is within {100 * worst_mean:.1f}% of
+−ρ g H/2 at every resolution, and the slope of σ_yy fitted over 0.1 H – 0.9 H comes to within
+{100 * abs(fine['err_slope']):.1f}% of ρ g at {int(fine['cells'])} cells. Locally the particles' stress is not the exact: the
+binned σ_yy departs from it bin to bin with alternating sign (by hand at 16 cells, commit
+9a5f138: +11.7, −1.0, −6.8, +3.5 % in the lowest four bins, and the bins' particle counts,
+3,200 at the start, at 3,053 to 3,347 in the middle of the column: particles moved across bin
+edges, far more than the 1e-3 strain moves them). The pattern is frozen, not the oscillation:
+PIC, which damps the column to rest, gives the same errors ("""
+               + "; ".join(f"{int(a['cells'])} cells {a['err_syy']:.3f} APIC, {b['err_syy']:.3f} PIC" for a, b in same)
+               + """). That is what a stress field the grid does not see looks like: with 4 particles and one
+node per cell, many particle stresses give the same nodal forces, and the transient after the
+release leaves the column in one of them. Smoothed with the kernel onto the interior node rows
+the error is about half (column "smoothed") and falls with dx from 16 cells on, but not at a
+clean order, so no order of convergence of the method is read from this benchmark. The lateral
+ratio (its mean below 0.8 H) stays """ + f"{100 * ratio_lo:.1f}–{100 * ratio_hi:.1f}%" + """ below ν/(1 − ν) at every resolution, in APIC
+and PIC alike: not explained here.""") if fine else ""
     colfig = f"\n![elastic column: error against dx (walls shifted)]({c['figs']['column']})\n" if "column" in c["figs"] else ""
     return f"""## 6. Analytic benchmarks
 
@@ -353,19 +379,17 @@ slip walls on a slip base, ρ 1000, E 1e7, ν 0.3, released stress free; the str
 periods of the column's oscillation (the average of a linear oscillation over whole periods is the
 equilibrium). Exact: σ_yy = −ρ g (H − y), σ_xx/σ_yy = ν/(1 − ν) = 0.4286. Stress per particle from its
 Fᴱ (Hencky, (3.70), Cauchy = τ/J), averaged in bins of dx in y; RMS errors over the bins (the ratio
-below 0.8 H). Run twice: walls exactly on grid lines (x = 0, x = W, y = 0), and moved 1e-6 dx into
-the column ("shifted"):
+below 0.8 H); "smoothed": σ_yy spread onto the node rows y = j dx with the quadratic kernel, RMS over the
+rows whose kernel lies inside the column; "mean": the volume mean of σ_yy against −ρ g H/2; "slope":
+the least-squares slope of the binned σ_yy over 0.1 H – 0.9 H against ρ g. Walls exactly on grid
+lines (x = 0, x = W, y = 0), and moved 1e-6 dx into the column ("shifted"); APIC, and PIC for three
+resolutions:
 
-{T(["walls", "cells over H", "particles", "σ_yy error", "σ_xx/σ_yy (mean)", "exact", "ratio error"], crows)}
+{T(["walls", "transfer", "cells over H", "particles", "σ_yy error (bins)", "smoothed", "mean", "slope", "σ_xx/σ_yy (mean)", "exact", "ratio error"], crows)}
 
 """ + "\n".join(f"- {o}." for o in orders) + f"""
 
-With the walls shifted the stress ratio is right to about 2% but the σ_yy error levels off at a few
-per cent instead of falling with dx, so no order of convergence of the method can be read from it.
-What limits it is not established here; candidates are the time average (APIC damps the oscillation a
-little, so the average over 8 periods is not exactly the equilibrium), the rows of particles at the
-free top and at the base, where the kernel reaches outside the material, and the finite strain
-(below 1e-3). With the walls on grid lines the errors are tens of per cent (the finding below).
+{colnote}
 {colfig}
 **Finding, fixed: a slip collider did not hold grid nodes that lie exactly on its surface.** In
 src/collide/collide.c a slip collider acted on nodes with φ < 0 only (a separating one on nodes whose
@@ -494,7 +518,7 @@ def honesty(c):
     bchange = (math.exp(sum(math.log(f["runout"] / s["runout"]) for f, s in bs) / len(bs)) if bs else float("nan"))
     an = res.get("analytic", {})
     col = an.get("column", [])
-    last = lambda w: next((r["ratio_mean"] for r in reversed(col) if r["walls"] == w), float("nan"))  # noqa: E731
+    last = lambda w: next((r["ratio_mean"] for r in reversed(col) if r["walls"] == w and r.get("transfer", "apic") == "apic"), float("nan"))  # noqa: E731
     col_on, col_sh = f"{last('on_grid_lines'):.3f}", f"{last('shifted'):.3f}"
     inc = [r for r in an.get("incline", []) if r["expected"] > 0]
     fr = [abs(r["rel_error"]) for r in inc if r["mu"] > 0]

@@ -211,10 +211,12 @@ sm_status sm_checkpoint_read(const char *path, unsigned char **stream, size_t *l
 }
 
 /* The sink keeps the last frame's state in memory (one sm_world_save per frame: a copy of the
- * particle arrays), so that a numerical failure in the next frame can still write it. */
+ * particle arrays), so that a numerical failure in the next frame, or a stop in the middle of it
+ * (app/run.h: stop_at_step), can still write it. */
 typedef struct ckpt_state {
     membuf last;      /* the stream of frame last_frame */
     int last_frame;   /* -1: none */
+    double last_time; /* the world's time at last_frame */
     const char *out;  /* the output folder */
     const sm_world *w;
 } ckpt_state;
@@ -258,17 +260,20 @@ static sm_status ckpt_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_
     ckpt_state *cs = s->state;
     cs->last.len = 0;
     cs->last_frame = save_exactly(fr->w, &cs->last) == SM_OK ? fr->frame : -1;
+    cs->last_time = sm_world_time(fr->w);
     if (c->every <= 0 || fr->frame == 0 || fr->frame % c->every != 0) return SM_OK;
     char path[SM_PATH_MAX];
     return sm_checkpoint_write(fr->out_dir, fr->w, fr->frame, c->scene_hash, c->keep, path, sizeof path, err, errlen);
 }
 
-/* After a numerical failure: the last good frame's state written as its checkpoint. */
+/* After a numerical failure, or a run stopped in the middle of a frame (it ended well, past the
+ * last frame's time): the last good frame's state written as its checkpoint. */
 static sm_status ckpt_end(sm_sink *s, sm_status run_status, char *err, size_t errlen) {
     const sm_checkpoint_config *c = s->config;
     ckpt_state *cs = s->state;
     sm_status st = SM_OK;
-    if (run_status == SM_ERR_NUMERICAL && cs->last_frame >= 0) { /* the saved bytes, as they are */
+    const int mid_frame_stop = run_status == SM_OK && sm_world_time(cs->w) > cs->last_time;
+    if ((run_status == SM_ERR_NUMERICAL || mid_frame_stop) && cs->last_frame >= 0) { /* the saved bytes, as they are */
         char dir[SM_PATH_MAX], path[SM_PATH_MAX];
         st = checkpoint_path(cs->out, cs->last_frame, dir, sizeof dir, path, sizeof path, err, errlen);
         if (st == SM_OK) st = write_durably(dir, path, NULL, &cs->last, cs->last_frame, c->scene_hash, err, errlen);

@@ -1,6 +1,7 @@
 /* The frame loop; see run.h. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,12 +18,15 @@ double sm_run_wall(void) {
 
 double sm_run_elapsed(const sm_run_frame *fr) { return sm_run_wall() - fr->start_wall; }
 
-/* Advances the world to frame f's time; a failure of the world or of the world_error check. */
-static sm_status advance_to(const sm_run_config *cfg, int f, char *err, size_t errlen) {
+/* Advances the world to frame f's time; a failure of the world or of the world_error check.
+ * *interrupted: 1 if the stop flag ended the advance early (stop_at_step: run.h). */
+static sm_status advance_to(const sm_run_config *cfg, int f, int *interrupted, char *err, size_t errlen) {
     sm_world *w = cfg->info.w;
     const double t0 = sm_world_time(w), t1 = f / cfg->info.fps;
     sm_world_reset_step_stats(w);
     sm_status s = sm_world_advance(w, t1);
+    *interrupted = s == SM_OK && sm_world_interrupted(w);
+    if (*interrupted) return SM_OK;
     const char *merr = cfg->world_error ? cfg->world_error(cfg->world_error_ctx) : NULL;
     if (merr) {
         snprintf(err, errlen, "%s", merr);
@@ -55,6 +59,12 @@ static sm_status sink_world(const sm_run_config *cfg, sm_world **view, char *err
 /* Across ranks, the writer's status everywhere (the sinks run on the writer only). */
 static sm_status agree(const sm_run_config *cfg, sm_status st, char *err, size_t errlen) {
     return cfg->ranks ? cfg->ranks->agree(cfg->ranks->ctx, st, err, errlen) : st;
+}
+
+/* sm_world_set_interrupt's poll: the stop flag (the library agrees it over the ranks). */
+static int poll_stop(void *user) {
+    const sm_run_config *cfg = user;
+    return *cfg->stop != 0;
 }
 
 static int stop_requested(const sm_run_config *cfg) {
@@ -94,7 +104,12 @@ static sm_status frame_loop(const sm_run_config *cfg, sm_world *view, sm_sink *s
                 res->stopped = 1;
                 return SM_OK;
             }
-            sm_status st = advance_to(cfg, f, err, errlen);
+            int interrupted;
+            sm_status st = advance_to(cfg, f, &interrupted, err, errlen);
+            if (st == SM_OK && interrupted) {
+                res->stopped = 1;
+                return SM_OK;
+            }
             if (st == SM_OK) st = sink_world(cfg, &view, err, errlen);
             if (st != SM_OK) return st;
         }
@@ -122,7 +137,10 @@ sm_status sm_run_frames(const sm_run_config *cfg, sm_sink *sinks, int nsinks, sm
     }
     if (st != SM_OK) begun--; /* the failed sink cleaned up after itself */
     st = agree(cfg, st, err, errlen);
+    const int interrupt = cfg->stop_at_step && cfg->stop;
+    if (interrupt) sm_world_set_interrupt(cfg->info.w, poll_stop, (void *)(uintptr_t)cfg);
     if (st == SM_OK) st = frame_loop(cfg, view, sinks, nsinks, res, err, errlen);
+    if (interrupt) sm_world_set_interrupt(cfg->info.w, NULL, NULL);
     for (int i = 0; i < begun; i++) {
         if (!sinks[i].end) continue;
         char e2[SM_MSG_MAX];

@@ -69,8 +69,13 @@ typedef struct sm_run_config {
     const char *(*world_error)(void *ctx);
     void *world_error_ctx;
     /* NULL, or a flag that, once non-zero, stops the run before the next frame is computed (a
-     * signal handler sets it). */
+     * signal handler sets it). With stop_at_step it stops the run at the next step instead
+     * (sm_world_set_interrupt), the world in the middle of a frame: for a writer that still holds
+     * the last frame (across ranks the writer's gathered view; on one process the checkpoint
+     * sink's copy, which its end then writes). A frame can take minutes, longer than a launcher
+     * waits after a signal (mpirun: 1 s, a batch system's grace time). */
     volatile sig_atomic_t *stop;
+    int stop_at_step;
     const sm_run_ranks *ranks; /* NULL, or a run across MPI ranks */
 } sm_run_config;
 

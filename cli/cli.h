@@ -117,13 +117,16 @@ sm_status cli_claim_folder(const char *out, const cli_claim *c, sm_run_manifest 
 /* ------------------------------------------------------------------------------------------ */
 /* signals.c                                                                                    */
 
-/* 0, or the signal (SIGINT, SIGTERM) that asked the command to stop after the frame in progress. */
+/* 0, or the signal (SIGINT, SIGTERM) that asked the command to stop (after the frame in progress, or
+ * at the next step: cli_signals_stop_at_step). */
 extern volatile sig_atomic_t cli_stop;
 /* Handles SIGINT and SIGTERM: the first sets cli_stop; the second removes the temporaries being
  * written, prints the last note and exits. */
 void cli_signals_install(void);
 /* What an immediate stop leaves complete, e.g. "sandmpm run: ...; frames 0..4 are complete in DIR/". */
 void cli_signals_note(const char *note);
+/* The first signal's message says the run stops at the next step (a run across ranks: app/run.h). */
+void cli_signals_stop_at_step(void);
 /* "SIGINT", "SIGTERM". */
 const char *cli_signal_name(int sig);
 /* A sink (app/run.h) that keeps the note up to date: the frames complete in the run's folder. */

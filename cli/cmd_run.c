@@ -180,6 +180,22 @@ static void say_what_is_complete(const char *out, int frames_written, int nframe
         fprintf(stderr, "sandmpm run: no frame was completed in %s/\n", out);
 }
 
+/* Whether a signal stops the run at the next step (app/run.h): when the last frame is kept
+ * elsewhere than in the world: across ranks in rank 0's view, on one process in the checkpoint
+ * sink's copy (--checkpoint-every > 0). Else it stops after the frame in progress. */
+static int stop_at_step(const run_args *a, const cli_ranks *ranks) { return ranks->count > 1 || a->ckpt_every > 0; }
+
+/* The checkpoint of frame that the checkpoint sink wrote after a stop inside the next frame. */
+static sm_status kept_checkpoint(const char *out, int frame, char *path, size_t pathlen, char *err, size_t errlen) {
+    if (snprintf(path, pathlen, "%s/checkpoints/ckpt_%08d.smc", out, frame) >= (int)pathlen) {
+        snprintf(err, errlen, "the checkpoint's path is too long");
+        return SM_ERR_IO;
+    }
+    if (access(path, R_OK) == 0) return SM_OK;
+    snprintf(err, errlen, "%s was not written", path);
+    return SM_ERR_IO;
+}
+
 /* The frame loop into out; the message of a failure or a stop printed. *stopped: the signal that
  * stopped it early, or 0. */
 static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, int nframes, int first, uint64_t hash,
@@ -203,6 +219,7 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
     cfg.world_error = motion_error;
     cfg.world_error_ctx = sc;
     cfg.stop = &cli_stop;
+    cfg.stop_at_step = stop_at_step(a, ranks);
     cfg.ranks = ranks->count > 1 ? &ranks->hooks : NULL;
     sm_run_result res;
     char err[SM_MSG_MAX];
@@ -216,7 +233,12 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
     sm_world *whole = ranks->count > 1 ? ranks->view : cfg.info.w; /* NULL on ranks other than 0 */
     if (*stopped && res.frames_written > 0 && whole) {
         char path[SM_PATH_MAX], e2[SM_MSG_MAX];
-        sm_status cs = sm_checkpoint_write(out, whole, res.frames_written - 1, hash, a->keep, path, sizeof path, e2, sizeof e2);
+        const int frame = res.frames_written - 1;
+        sm_status cs;
+        if (sm_world_time(whole) > frame / st->fps) /* stopped inside a frame: the sink wrote the last one */
+            cs = kept_checkpoint(out, frame, path, sizeof path, e2, sizeof e2);
+        else
+            cs = sm_checkpoint_write(out, whole, frame, hash, a->keep, path, sizeof path, e2, sizeof e2);
         char launcher[32] = "";
         if (ranks->count > 1) snprintf(launcher, sizeof launcher, "mpirun -np %d ", ranks->count);
         if (cs == SM_OK)
@@ -393,6 +415,7 @@ static int run_command(int argc, char **argv) {
         manifest.threads = a.so.threads;
         manifest.rank_particles = ranks.shares;
         cli_signals_install();
+        if (stop_at_step(&a, &ranks)) cli_signals_stop_at_step();
         st = run_frames(&a, sc, out, nframes, first, hash, &manifest, &ranks, &stopped);
         cli_ranks_close(&ranks);
     }

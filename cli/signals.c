@@ -1,6 +1,7 @@
 /* SIGINT and SIGTERM during `run` and `render`. The first asks to stop after the frame in
  * progress: the loop (app/run.h) checks cli_stop before computing the next frame, so every file
- * under its final name is whole and the command says what was written. The second stops at once:
+ * under its final name is whole and the command says what was written (across MPI ranks it stops
+ * at the next step instead, keeping the last frame: cli_signals_stop_at_step). The second stops at once:
  * the handler removes the temporaries being written (app/io/files.h), prints the note of what is
  * complete so far, and exits. */
 #define _POSIX_C_SOURCE 200809L
@@ -29,11 +30,17 @@ static void say(const char *s) {
     }
 }
 
+/* Where the first signal stops: after the frame in progress, or (across ranks) at the next step. */
+static volatile sig_atomic_t stop_at_step = 0;
+
+void cli_signals_stop_at_step(void) { stop_at_step = 1; }
+
 static void on_signal(int sig) {
     if (!cli_stop) {
         cli_stop = sig;
-        say(sig == SIGINT ? "\nsandmpm: SIGINT: stopping after the frame in progress (again to stop at once)\n"
-                          : "\nsandmpm: SIGTERM: stopping after the frame in progress (again to stop at once)\n");
+        say(sig == SIGINT ? "\nsandmpm: SIGINT: " : "\nsandmpm: SIGTERM: ");
+        say(stop_at_step ? "stopping at the next step, keeping the last frame (again to stop at once)\n"
+                         : "stopping after the frame in progress (again to stop at once)\n");
         return;
     }
     sm_remove_open_temporaries();

@@ -4,7 +4,9 @@
 #    thread count, ends with a last frame byte-identical to an uninterrupted run's;
 #  - a corrupted newest checkpoint is reported and the previous one used (same last frame);
 #  - a resume with other --set values is refused (exit 2) and --force overrides it;
-#  - SIGINT writes a checkpoint of the last frame and prints the resume command;
+#  - SIGINT writes a checkpoint of the last frame and prints the resume command; SIGTERM inside a
+#    long frame stops at the next step, keeps the last frame, and the resume computes the frame
+#    as an uninterrupted run;
 #  - only the last K checkpoints are kept;
 #  - diagnostics.csv, poses.csv, frames.pvd and run_manifest.txt after a resume equal the
 #    uninterrupted run's.
@@ -93,6 +95,42 @@ if grep -q "continue with: sandmpm run" "$TMP/err"; then
     cmp -s "$TMP/b/$last" "$TMP/ref/$last" && ok || bad "resume after SIGINT: last frame differs"
 else
     grep -q "frames 0..24 of 0..24\|^$" "$TMP/err" || bad "SIGINT: no checkpoint reported: $(cat "$TMP/err")"
+fi
+
+# SIGTERM inside a long frame (about 100,000 steps) with checkpoints on: the run stops at the next
+# step, not after the frame; the checkpoint sink's copy of frame 0 is written and named, frame 1
+# is not written, and the resume computes frame 1 as an uninterrupted run does.
+long=$TMP/long.lua
+cat > "$long" <<'LUA'
+return {
+  dim = 2, dx = 0.05, ppc = 4, fps = 0.01, frames = 1,
+  domain = { min = {0, 0}, max = {1, 1} },
+  materials = { sand = { model = "sand", friction_angle = 30 } },
+  objects = { { shape = { type = "box", center = {0.5, 0.3}, half_extent = {0.1, 0.1} }, material = "sand" } },
+  colliders = { { shape = { type = "halfspace", point = {0, 0.1}, normal = {0, 1} }, mode = "sticky" } },
+}
+LUA
+"$BIN" run "$long" --out "$TMP/l" --threads 1 --checkpoint-every 5 >/dev/null 2>"$TMP/err" &
+pid=$!
+for _ in $(seq 1 1000); do
+    [ -f "$TMP/l/frame_0000.ply" ] || ! kill -0 "$pid" 2>/dev/null && break
+    sleep 0.02
+done
+sleep 0.2 # into frame 1
+kill -TERM "$pid"
+wait "$pid"
+rc=$?
+[ "$rc" -eq 143 ] && ok || bad "SIGTERM inside a frame: exit $rc, want 143"
+grep -qF "SIGTERM: stopping at the next step" "$TMP/err" && ok || bad "SIGTERM inside a frame: no stop message: $(cat "$TMP/err")"
+if grep -qF "state at frame 0 kept in $TMP/l/checkpoints/ckpt_00000000.smc" "$TMP/err"; then
+    ok
+    [ ! -e "$TMP/l/frame_0001.ply" ] && ok || bad "SIGTERM inside a frame: frame 1 written"
+    "$BIN" run "$long" --out "$TMP/l-ref" --threads 1 --checkpoint-every 0 >/dev/null 2>&1 || bad "long: reference run"
+    "$BIN" run "$long" --out "$TMP/l" --threads 1 --checkpoint-every 5 --resume >/dev/null 2>"$TMP/err" ||
+        bad "resume after a stop inside a frame: $(cat "$TMP/err")"
+    cmp -s "$TMP/l/frame_0001.ply" "$TMP/l-ref/frame_0001.ply" && ok || bad "resume after a stop inside a frame: frame 1 differs"
+else
+    bad "SIGTERM inside a frame: frame 0's checkpoint not kept and named: $(cat "$TMP/err")"
 fi
 
 # A numerical failure (NaN written into a particle's velocity after frame 10 by the program's test

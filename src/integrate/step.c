@@ -377,10 +377,24 @@ static sm_status runaway(sm_world *w, double dt) {
                          (unsigned long long)w->steps, w->time, max_particle_speed(w), dt, SM_RUNAWAY_DT_FRACTION);
 }
 
+/* Whether the caller's interrupt asks to stop before the next step (sm_world_set_interrupt);
+ * agreed over the ranks of a distributed world (collective: every rank asks at the same step). */
+static int interrupt_now(const sm_world *w) {
+    if (!w->interrupt) return 0;
+    const int mine = w->interrupt(w->interrupt_user) != 0;
+    return w->dist ? sm_dist_max_int(w, mine) : mine;
+}
+
 sm_status sm_world_advance(sm_world *w, double t_end) {
     if (!isfinite(t_end)) return sm_world_fail(w, SM_ERR_INVALID, "advance: end time must be finite");
     int retries = 0;
+    w->interrupted = 0;
     while (w->time < t_end) {
+        /* Only between taken steps: after a refusal the dt cap is state a checkpoint lacks. */
+        if (retries == 0 && interrupt_now(w)) {
+            w->interrupted = 1;
+            return SM_OK;
+        }
         const double dt = sm_world_next_dt(w, t_end);
         const int last = (dt == t_end - w->time);
         if (!last && !(dt >= SM_RUNAWAY_DT_FRACTION * w->def.max_dt)) return runaway(w, dt);
@@ -395,6 +409,13 @@ sm_status sm_world_advance(sm_world *w, double t_end) {
     }
     return SM_OK;
 }
+
+void sm_world_set_interrupt(sm_world *w, int (*poll)(void *user), void *user) {
+    w->interrupt = poll;
+    w->interrupt_user = user;
+}
+
+int sm_world_interrupted(const sm_world *w) { return w->interrupted; }
 
 /* ---- Test hooks: single stages ---------------------------------------------------------- */
 

@@ -80,6 +80,9 @@ struct sm_world {
     int dirty;              /* particles changed outside a step since the last G2P: scan them */
     int failed;             /* a numerical failure stopped the world */
     uint64_t next_id;       /* the id the next added particle gets (particles.h's field id) */
+    int (*interrupt)(void *user); /* sm_world_set_interrupt: non-zero stops sm_world_advance (not saved) */
+    void *interrupt_user;
+    int interrupted;        /* the last sm_world_advance returned early for it */
 
     char err[512];
 };

@@ -612,9 +612,9 @@ SM_API sm_status sm_world_advance(sm_world *w, double t_end);
  *  refused one) it calls poll(user), and when that returns non-zero it returns SM_OK at once,
  *  the world at the end of its last step, before t_end, with sm_world_interrupted(w) = 1. The
  *  world is whole there: it may be saved (a checkpoint resumes bitwise, also mid-way to t_end)
- *  or advanced further. In a distributed world (sandmpm_mpi.h) poll runs on every rank before
- *  every step and the answers are agreed: any rank's stops all at the same step. NULL removes
- *  it. Not saved in checkpoints. poll must be cheap (a signal flag, a clock). */
+ *  or advanced further. In a distributed world (sandmpm_mpi.h) set it on every rank alike (the
+ *  check is collective): poll runs on every rank before every step and the answers are agreed,
+ *  so any rank's stops all at the same step. NULL removes it. Not saved in checkpoints. poll must be cheap (a signal flag, a clock). */
 SM_API void sm_world_set_interrupt(sm_world *w, int (*poll)(void *user), void *user);
 
 /** 1 if the last sm_world_advance returned early for its interrupt (sm_world_set_interrupt). */

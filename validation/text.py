@@ -61,13 +61,24 @@ particle_projection; README).
 From a frame's PLY file (validation/deposit.py): s = dx / ppc^(1/d) is the particle spacing. The
 deposit thickness in bins of width dx (2D: x from the back wall; 3D: annuli in r = √(x² + z²) of the
 quarter) is the particles' current volume V0 Jᴱ per unit base length or area. The **front** (L∞ or
-R∞) is found going outward: the last bin at least one particle layer (s) thick, bridging single
-thinner bins, and within it the farthest particle plus s/2; scattered particles beyond do not count.
+R∞) is found going outward: the last bin at least 0.75 s thick (a particle layer less a quarter, so
+that a layer compacted a little, Jᴱ < 1, still counts), bridging single thinner bins, and within it
+the farthest particle plus s/2; scattered particles beyond do not count.
 The **height** H∞ is the highest particle inside the front plus s/2. At t = 0 these return L0 (R0)
 and H0 to within the seeding jitter (s/2). The **flow duration** t∞ is the first frame time after
 which the front stays within 2% of its final advance (frames every √(H0/g)/4). The **repose angle**
 of a pile or heap is the slope of a least-squares line through the top surface (highest particle per
 bin plus s/2) where it lies between 20% and 80% of the peak height.
+
+The threshold decides whether a one-layer tongue at the front belongs to the deposit. Until
+2026-12-03 it was s itself, which a one-layer bin reaches only when its particles are not
+compacted (Jᴱ ≥ 1), so rounding decided it: the thesis-fit 2D collapse at a = 8 ran out 11.26 L0
+in the float build and 12.52 L0 in the double build, whose deposits differ at the rounding level. Measured by hand on
+this study's 2D thesis-fit runs (float) and reruns in the double build, (L∞ − L0)/L0 for a = 0.5,
+1, 2, 3, 4, 6, 8: with 0.75 s (or 0.6 s) 0.49, 1.31, 3.65, 5.93, 7.67, 9.66, 12.52 in both builds;
+with s (or 1.25 s) 0.43, 1.23, 3.26, 5.18, 5.93 (5.94 double), 8.27, and 11.26 / 12.52 at a = 8. So the
+tongue is worth 0.06 to 1.7 L0, and the 2D runouts below are 10–30% longer than the document's
+figures before that date.
 """
 
 

@@ -159,14 +159,30 @@ static uint64_t get_le(const unsigned char *p, int bytes) {
 }
 
 /* out_dir/checkpoints (made if missing) and the file name of frame's checkpoint in it. */
-static sm_status checkpoint_path(const char *out_dir, int frame, char *dir, size_t dirlen, char *path, size_t pathlen,
+/* OUT/checkpoints and OUT/checkpoints/ckpt_FRAME.smc into dir and path. */
+static sm_status checkpoint_name(const char *out_dir, int frame, char *dir, size_t dirlen, char *path, size_t pathlen,
                                  char *err, size_t errlen) {
     if (snprintf(dir, dirlen, "%s/checkpoints", out_dir) >= (int)dirlen - SM_NAME_RESERVE ||
         snprintf(path, pathlen, "%s/ckpt_%08d.smc", dir, frame) >= (int)pathlen) {
         snprintf(err, errlen, "%s: name too long for its checkpoints", out_dir);
         return SM_ERR_IO;
     }
-    return sm_make_dirs(dir, err, errlen);
+    return SM_OK;
+}
+
+/* checkpoint_name, and the folder made. */
+static sm_status checkpoint_path(const char *out_dir, int frame, char *dir, size_t dirlen, char *path, size_t pathlen,
+                                 char *err, size_t errlen) {
+    sm_status st = checkpoint_name(out_dir, frame, dir, dirlen, path, pathlen, err, errlen);
+    return st == SM_OK ? sm_make_dirs(dir, err, errlen) : st;
+}
+
+sm_status sm_checkpoint_find(const char *out_dir, int frame, char *path, size_t pathlen, char *err, size_t errlen) {
+    char dir[SM_PATH_MAX];
+    sm_status st = checkpoint_name(out_dir, frame, dir, sizeof dir, path, pathlen, err, errlen);
+    if (st != SM_OK || access(path, R_OK) == 0) return st;
+    snprintf(err, errlen, "%s was not written", path);
+    return SM_ERR_IO;
 }
 
 sm_status sm_checkpoint_write(const char *out_dir, const sm_world *w, int frame, uint64_t scene_hash, int keep, char *path,

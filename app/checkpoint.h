@@ -22,6 +22,10 @@ typedef struct sm_checkpoint_config {
 /* The sink that writes them (frames every, 2 every, ...). */
 sm_sink sm_sink_checkpoint(const sm_checkpoint_config *config);
 
+/* The path of frame's checkpoint in out_dir/checkpoints/; SM_OK if it is there to read, else
+ * SM_ERR_IO with err. */
+sm_status sm_checkpoint_find(const char *out_dir, int frame, char *path, size_t pathlen, char *err, size_t errlen);
+
 /* Writes the checkpoint of w at frame into out_dir/checkpoints/. SM_OK or SM_ERR_IO with err. */
 sm_status sm_checkpoint_write(const char *out_dir, const sm_world *w, int frame, uint64_t scene_hash, int keep, char *path,
                               size_t pathlen, char *err, size_t errlen);

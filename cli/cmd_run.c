@@ -185,17 +185,6 @@ static void say_what_is_complete(const char *out, int frames_written, int nframe
  * sink's copy (--checkpoint-every > 0). Else it stops after the frame in progress. */
 static int stop_at_step(const run_args *a, const cli_ranks *ranks) { return ranks->count > 1 || a->ckpt_every > 0; }
 
-/* The checkpoint of frame that the checkpoint sink wrote after a stop inside the next frame. */
-static sm_status kept_checkpoint(const char *out, int frame, char *path, size_t pathlen, char *err, size_t errlen) {
-    if (snprintf(path, pathlen, "%s/checkpoints/ckpt_%08d.smc", out, frame) >= (int)pathlen) {
-        snprintf(err, errlen, "the checkpoint's path is too long");
-        return SM_ERR_IO;
-    }
-    if (access(path, R_OK) == 0) return SM_OK;
-    snprintf(err, errlen, "%s was not written", path);
-    return SM_ERR_IO;
-}
-
 /* The frame loop into out; the message of a failure or a stop printed. *stopped: the signal that
  * stopped it early, or 0. */
 static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, int nframes, int first, uint64_t hash,
@@ -236,7 +225,7 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
         const int frame = res.frames_written - 1;
         sm_status cs;
         if (sm_world_time(whole) > frame / st->fps) /* stopped inside a frame: the sink wrote the last one */
-            cs = kept_checkpoint(out, frame, path, sizeof path, e2, sizeof e2);
+            cs = sm_checkpoint_find(out, frame, path, sizeof path, e2, sizeof e2);
         else
             cs = sm_checkpoint_write(out, whole, frame, hash, a->keep, path, sizeof path, e2, sizeof e2);
         char launcher[32] = "";

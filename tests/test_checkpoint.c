@@ -10,25 +10,6 @@
 #include "sandmpm/sandmpm.h"
 #include "test_util.h"
 
-typedef struct membuf {
-    unsigned char *data;
-    size_t len, cap;
-} membuf;
-
-static int mem_write(void *user, const void *p, size_t n) {
-    membuf *b = user;
-    if (b->len + n > b->cap) {
-        size_t cap = (b->len + n) * 2;
-        unsigned char *q = realloc(b->data, cap);
-        if (!q) return 1;
-        b->data = q;
-        b->cap = cap;
-    }
-    memcpy(b->data + b->len, p, n);
-    b->len += n;
-    return 0;
-}
-
 static void paddle_motion(void *user, double t, sm_pose *pose) {
     (void)user;
     memset(pose, 0, sizeof *pose);
@@ -125,10 +106,10 @@ static void test_dim(int dim) {
 
     sm_world *a = build(dim, 2);
     advance(a, 0, mid);
-    membuf buf = {0};
-    CHECK(sm_world_save(a, mem_write, &buf) == SM_OK);
-    membuf again = {0};
-    sm_world_save(a, mem_write, &again);
+    sm_test_membuf buf = {0};
+    CHECK(sm_world_save(a, sm_test_mem_write, &buf) == SM_OK);
+    sm_test_membuf again = {0};
+    sm_world_save(a, sm_test_mem_write, &again);
     CHECK(again.len == buf.len && memcmp(again.data, buf.data, buf.len) == 0); /* same world, same bytes */
     sm_diagnostics dm;
     sm_world_diagnostics(a, &dm);
@@ -154,8 +135,8 @@ static void test_dim(int dim) {
     char err[256];
     CHECK(sm_world_load(buf.data, buf.len, &c, err, sizeof err) == SM_OK);
     CHECK(sm_world_state_hash(c) == sm_world_state_hash(a));
-    membuf back = {0};
-    sm_world_save(c, mem_write, &back);
+    sm_test_membuf back = {0};
+    sm_world_save(c, sm_test_mem_write, &back);
     CHECK(back.len == buf.len);
 
     /* Hostile input: every truncation, and flipped bytes in the header, are refused. */

@@ -49,26 +49,6 @@ static int poll(void *user) {
     return ++p->calls >= p->at;
 }
 
-typedef struct membuf {
-    unsigned char *data;
-    size_t len, cap;
-} membuf;
-
-static int mem_write(void *user, const void *data, size_t len) {
-    membuf *m = user;
-    if (m->len + len > m->cap) {
-        size_t cap = m->cap ? 2 * m->cap : 65536;
-        while (cap < m->len + len) cap *= 2;
-        unsigned char *q = realloc(m->data, cap);
-        if (!q) return 1;
-        m->data = q;
-        m->cap = cap;
-    }
-    memcpy(m->data + m->len, data, len);
-    m->len += len;
-    return 0;
-}
-
 int main(void) {
     const double t_end = 0.05;
     sm_world *ref = build(), *w = build();
@@ -90,8 +70,8 @@ int main(void) {
     CHECK(d.steps == 5 && pc.calls == 6);
     CHECK(sm_world_time(w) > 0 && sm_world_time(w) < t_end);
 
-    membuf ck = {NULL, 0, 0};
-    CHECK(sm_world_save(w, mem_write, &ck) == SM_OK);
+    sm_test_membuf ck = {NULL, 0, 0};
+    CHECK(sm_world_save(w, sm_test_mem_write, &ck) == SM_OK);
     sm_world *resumed = NULL;
     char err[256];
     CHECK(sm_world_load(ck.data, ck.len, &resumed, err, sizeof err) == SM_OK);

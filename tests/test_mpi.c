@@ -94,30 +94,9 @@ static sm_world *build(int dim, int threads, size_t *ball_id) {
     return w;
 }
 
-/* A growing memory buffer for sm_world_save. */
-typedef struct membuf {
-    unsigned char *data;
-    size_t len, cap;
-} membuf;
-
-static int mem_write(void *user, const void *data, size_t len) {
-    membuf *m = user;
-    if (m->len + len > m->cap) {
-        size_t cap = m->cap ? m->cap : 65536;
-        while (cap < m->len + len) cap *= 2;
-        unsigned char *q = realloc(m->data, cap);
-        if (!q) return 1;
-        m->data = q;
-        m->cap = cap;
-    }
-    memcpy(m->data + m->len, data, len);
-    m->len += len;
-    return 0; /* sm_write_fn: 0 is success */
-}
-
 /* Resumes the checkpoint (rank 0's bytes) on ranks [0, M) and runs it to the end: the final id
  * hash, the same on every rank (0 on ranks past M). */
-static uint64_t resume(membuf *ck, int M) {
+static uint64_t resume(sm_test_membuf *ck, int M) {
     unsigned long long len = ck->len;
     MPI_Bcast(&len, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
     if (rank != 0) {
@@ -198,9 +177,9 @@ static void run(int dim) {
     CHECK(!any_empty);
     int owner = holder(w, ball_id), changes = 0;
     CHECK(owner >= 0);
-    membuf ck = {NULL, 0, 0};
+    sm_test_membuf ck = {NULL, 0, 0};
     for (int f = 1; f <= FRAMES; f++) {
-        if (f == FRAMES / 2 + 1) CHECK(sm_world_save(w, mem_write, &ck) == SM_OK); /* collective */
+        if (f == FRAMES / 2 + 1) CHECK(sm_world_save(w, sm_test_mem_write, &ck) == SM_OK); /* collective */
         const sm_status st = sm_world_advance(w, f * FRAME_DT);
         CHECK(st == SM_OK);
         if (st != SM_OK) {

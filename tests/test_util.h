@@ -5,6 +5,8 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 
 static int sm_test_checks = 0, sm_test_failures = 0;
 
@@ -58,6 +60,27 @@ static inline unsigned long long sm_test_rng_next(unsigned long long *s) {
 /* Uniform in [lo, hi). */
 static inline double sm_test_uniform(unsigned long long *s, double lo, double hi) {
     return lo + (hi - lo) * (double)(sm_test_rng_next(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* A growing memory buffer for sm_world_save (sm_write_fn: 0 is success). */
+typedef struct sm_test_membuf {
+    unsigned char *data;
+    size_t len, cap;
+} sm_test_membuf;
+
+static inline int sm_test_mem_write(void *user, const void *data, size_t len) {
+    sm_test_membuf *m = user;
+    if (m->len + len > m->cap) {
+        size_t cap = m->cap ? m->cap : 65536;
+        while (cap < m->len + len) cap *= 2;
+        unsigned char *q = realloc(m->data, cap);
+        if (!q) return 1;
+        m->data = q;
+        m->cap = cap;
+    }
+    memcpy(m->data + m->len, data, len);
+    m->len += len;
+    return 0;
 }
 
 #endif

@@ -9,11 +9,6 @@
 #include "dist/dist_internal.h"
 #include "world/world.h"
 
-/* Pieces of `bytes` bytes at d->piece bytes each (0 for an empty buffer). */
-static size_t pieces(const sm_dist *d, size_t bytes) {
-    return (bytes + d->piece - 1) / d->piece;
-}
-
 int sm_dist_reserve_requests(sm_dist *d, size_t n) {
     if (n <= d->req_cap) return 1;
     MPI_Request *r = realloc(d->req, n * sizeof *r);
@@ -23,9 +18,8 @@ int sm_dist_reserve_requests(sm_dist *d, size_t n) {
     return 1;
 }
 
-size_t sm_dist_request_count(const sm_dist *d, size_t bytes) {
-    return pieces(d, bytes);
-}
+/* Pieces of `bytes` bytes at d->piece bytes each (0 for an empty buffer). */
+size_t sm_dist_request_count(const sm_dist *d, size_t bytes) { return (bytes + d->piece - 1) / d->piece; }
 
 /* One piece after another: `send` 1 posts sends of buf to peer, 0 receives into it. Returns the
  * requests posted, written from d->req + at. */

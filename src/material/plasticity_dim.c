@@ -4,9 +4,11 @@
  *   F^E-hat = U diag(s) V^T;  s' = PROJECT(s, alpha);  F^E = U diag(s') V^T;
  *   q += dq, alpha = alpha(phi_F(q)) (3.78)-(3.80);   tau = U diag(2 mu ln s' + lambda tr ln s') U^T.
  * Every particle goes through the same lane-wise operations whatever its batch, so the result
- * does not depend on the thread count. */
+ * does not depend on the thread count; every thread flushes subnormal numbers to zero
+ * (core/fpmode.h), so it does not depend on whether the caller flushes them either. */
 #include "core/dim.h"
 
+#include "core/fpmode.h"
 #include "material/plasticity.h"
 
 int SM_FN(sm_plasticity)(const sm_plasticity_io *io) {
@@ -21,6 +23,7 @@ int SM_FN(sm_plasticity)(const sm_plasticity_io *io) {
         int lane_mat[L]; /* material whose parameters lane l holds (-1: padding) */
         for (int l = 0; l < L; l++) lane_mat[l] = -2;
         sm_real z = 0; /* 0 * every output: NaN iff one is not finite */
+        const sm_fpmode fp = sm_fpmode_flush_subnormals(); /* core/fpmode.h */
 #pragma omp for schedule(static)
         for (long t = 0; t < nbatch; t++) {
             const size_t p0 = first + (size_t)t * L;
@@ -46,6 +49,7 @@ int SM_FN(sm_plasticity)(const sm_plasticity_io *io) {
                                             io->tau + p * SM_NSYM(D));
             }
         }
+        sm_fpmode_restore(fp);
         bad |= (z != 0 || z != z);
     }
     return bad;

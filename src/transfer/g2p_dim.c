@@ -53,47 +53,53 @@ typedef struct g2p_acc {
 /* The interpolated sums of one particle from the cache: Sum = sum w N (lanes 0..d-1: v-tilde
  * part, d..2d-1: v-bar) and E[e] = sum K_e N, where K_e = (w dp_e, ..., dw_e, ...): lanes 0..d-1
  * give B's column e, lanes d..2d-1 the velocity gradient's column e. */
-static inline __attribute__((always_inline)) void g2p_sums(int S, const weights *restrict Wp,
+static inline __attribute__((always_inline)) void g2p_sums(int S, const wchunk *restrict wc, int j,
                                                           const vec *restrict cache, vec *Sum_out, vec E[D]) {
-    const weights W = *Wp;
     vec K[D][4];
+    /* Built by lane stores in 2D, by bit selects of broadcasts in 3D: each measured the faster
+     * there (Intel Xeon, float: 2D G2P 1.45e7 against 1.28e7 particles/s; 3D 1.4e7 against 1.15e7) */
+#if D == 2
     for (int e = 0; e < D; e++)
         for (int s = 0; s < S; s++) {
             vec k = {0};
             for (int a = 0; a < D; a++) {
-                k[a] = W.w[e][s] * W.dp[e][s];
-                k[D + a] = W.dw[e][s];
+                k[a] = WC_W(e, s) * WC_DP(e, s);
+                k[D + a] = WC_DW(e, s);
             }
             K[e][s] = k;
         }
+#else
+    for (int e = 0; e < D; e++)
+        for (int s = 0; s < S; s++) K[e][s] = vec_pair(WC_W(e, s) * WC_DP(e, s), WC_DW(e, s));
+#endif
     vec Sum = {0};
     for (int e = 0; e < D; e++) E[e] = (vec){0};
 #if D == 2
     for (int s0 = 0; s0 < S; s0++) {
-        const vec *row = cache + (W.lb[0] + s0) * SM_CACHE_SIDE + W.lb[1];
+        const vec *row = cache + (WC_LB(0) + s0) * SM_CACHE_SIDE + WC_LB(1);
         vec t = {0}, ty = {0};
         for (int s1 = 0; s1 < S; s1++) {
             const vec N = row[s1];
-            t += W.w[1][s1] * N;
+            t += WC_W(1, s1) * N;
             ty += K[1][s1] * N;
         }
-        Sum += W.w[0][s0] * t;
+        Sum += WC_W(0, s0) * t;
         E[0] += K[0][s0] * t;
-        E[1] += W.w[0][s0] * ty;
+        E[1] += WC_W(0, s0) * ty;
     }
 #else
     vec KY[4][4], KZ[4][4];
     sm_real W12[4][4];
     for (int s1 = 0; s1 < S; s1++)
         for (int s2 = 0; s2 < S; s2++) {
-            W12[s1][s2] = W.w[1][s1] * W.w[2][s2];
-            KY[s1][s2] = W.w[2][s2] * K[1][s1];
-            KZ[s1][s2] = W.w[1][s1] * K[2][s2];
+            W12[s1][s2] = WC_W(1, s1) * WC_W(2, s2);
+            KY[s1][s2] = WC_W(2, s2) * K[1][s1];
+            KZ[s1][s2] = WC_W(1, s1) * K[2][s2];
         }
     for (int s0 = 0; s0 < S; s0++) {
         vec t = {0}, ty = {0}, tz = {0};
         for (int s1 = 0; s1 < S; s1++) {
-            const vec *row = cache + ((W.lb[0] + s0) * SM_CACHE_SIDE + W.lb[1] + s1) * SM_CACHE_SIDE + W.lb[2];
+            const vec *row = cache + ((WC_LB(0) + s0) * SM_CACHE_SIDE + WC_LB(1) + s1) * SM_CACHE_SIDE + WC_LB(2);
             for (int s2 = 0; s2 < S; s2++) {
                 const vec N = row[s2];
                 t += W12[s1][s2] * N;
@@ -101,10 +107,10 @@ static inline __attribute__((always_inline)) void g2p_sums(int S, const weights 
                 tz += KZ[s1][s2] * N;
             }
         }
-        Sum += W.w[0][s0] * t;
+        Sum += WC_W(0, s0) * t;
         E[0] += K[0][s0] * t;
-        E[1] += W.w[0][s0] * ty;
-        E[2] += W.w[0][s0] * tz;
+        E[1] += WC_W(0, s0) * ty;
+        E[2] += WC_W(0, s0) * tz;
     }
 #endif
     *Sum_out = Sum;
@@ -198,10 +204,8 @@ static inline __attribute__((always_inline)) void g2p_block(const sm_g2p_io *io,
     for (uint32_t idx = pb->start; idx < pb->end; idx++) {
         const int j = (int)((idx - pb->start) % WCH);
         if (j == 0) chunk_weights(S, io->x, io->n, 0, (int)pb->ascending, perm, idx, (int)(pb->end - idx), c, bc, &wc);
-        weights W;
-        chunk_get(&wc, j, &W);
         vec Sum, E[D];
-        g2p_sums(S, &W, cache, &Sum, E);
+        g2p_sums(S, &wc, j, cache, &Sum, E);
         g2p_update(io, c, perm[idx], Sum, E, acc);
     }
 }

@@ -57,33 +57,32 @@ static inline __attribute__((always_inline)) void p2g_terms(const sm_p2g_io *io,
 }
 
 /* Adds one particle's contributions to its S^d cached nodes. */
-static inline __attribute__((always_inline)) void p2g_splat(int S, const weights *Wp, vec A, const vec Ce[D],
-                                                           const vec Ve[D], vec *restrict cache) {
-    const weights W = *Wp;
+static inline __attribute__((always_inline)) void p2g_splat(int S, const wchunk *restrict wc, int j, vec A,
+                                                           const vec Ce[D], const vec Ve[D], vec *restrict cache) {
     /* Per-axis parts: axis 0 carries A; axes 1.. carry only their C and V terms. */
     vec Px[4], Ry[4];
     for (int s = 0; s < S; s++) {
-        Px[s] = W.w[0][s] * A + (W.w[0][s] * W.dp[0][s]) * Ce[0] + W.dw[0][s] * Ve[0];
-        Ry[s] = (W.w[1][s] * W.dp[1][s]) * Ce[1] + W.dw[1][s] * Ve[1];
+        Px[s] = WC_W(0, s) * A + (WC_W(0, s) * WC_DP(0, s)) * Ce[0] + WC_DW(0, s) * Ve[0];
+        Ry[s] = (WC_W(1, s) * WC_DP(1, s)) * Ce[1] + WC_DW(1, s) * Ve[1];
     }
 #if D == 2
     for (int s0 = 0; s0 < S; s0++) {
-        vec *row = cache + (W.lb[0] + s0) * SM_CACHE_SIDE + W.lb[1];
-        for (int s1 = 0; s1 < S; s1++) row[s1] += W.w[1][s1] * Px[s0] + W.w[0][s0] * Ry[s1];
+        vec *row = cache + (WC_LB(0) + s0) * SM_CACHE_SIDE + WC_LB(1);
+        for (int s1 = 0; s1 < S; s1++) row[s1] += WC_W(1, s1) * Px[s0] + WC_W(0, s0) * Ry[s1];
     }
 #else
     vec Rz[4], Y[4][4];
     sm_real W12[4][4];
-    for (int s = 0; s < S; s++) Rz[s] = (W.w[2][s] * W.dp[2][s]) * Ce[2] + W.dw[2][s] * Ve[2];
+    for (int s = 0; s < S; s++) Rz[s] = (WC_W(2, s) * WC_DP(2, s)) * Ce[2] + WC_DW(2, s) * Ve[2];
     for (int s1 = 0; s1 < S; s1++)
         for (int s2 = 0; s2 < S; s2++) {
-            W12[s1][s2] = W.w[1][s1] * W.w[2][s2];
-            Y[s1][s2] = W.w[2][s2] * Ry[s1] + W.w[1][s1] * Rz[s2];
+            W12[s1][s2] = WC_W(1, s1) * WC_W(2, s2);
+            Y[s1][s2] = WC_W(2, s2) * Ry[s1] + WC_W(1, s1) * Rz[s2];
         }
     for (int s0 = 0; s0 < S; s0++) {
-        const sm_real w0 = W.w[0][s0];
+        const sm_real w0 = WC_W(0, s0);
         for (int s1 = 0; s1 < S; s1++) {
-            vec *row = cache + ((W.lb[0] + s0) * SM_CACHE_SIDE + W.lb[1] + s1) * SM_CACHE_SIDE + W.lb[2];
+            vec *row = cache + ((WC_LB(0) + s0) * SM_CACHE_SIDE + WC_LB(1) + s1) * SM_CACHE_SIDE + WC_LB(2);
             for (int s2 = 0; s2 < S; s2++) row[s2] += W12[s1][s2] * Px[s0] + w0 * Y[s1][s2];
         }
     }
@@ -123,11 +122,9 @@ static inline __attribute__((always_inline)) void p2g_block(const sm_p2g_io *io,
         const size_t p = bins->perm[idx];
         const int j = (int)((idx - pb->start) % WCH);
         if (j == 0) chunk_weights(S, io->x, io->n, 1, (int)pb->ascending, bins->perm, idx, (int)(pb->end - idx), c, bc, &wc);
-        weights W;
-        chunk_get(&wc, j, &W);
         vec A, Ce[D], Ve[D];
         p2g_terms(io, p, apic, dinv, &A, Ce, Ve);
-        p2g_splat(S, &W, A, Ce, Ve, cache);
+        p2g_splat(S, &wc, j, A, Ce, Ve, cache);
     }
     p2g_flush(pb, cache, &io->grid);
 }

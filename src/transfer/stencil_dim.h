@@ -18,6 +18,25 @@
 #endif
 
 typedef sm_real vec __attribute__((vector_size(SM_LANES * sizeof(sm_real))));
+#if SM_DOUBLE
+typedef int64_t ivec __attribute__((vector_size(SM_LANES * sizeof(sm_real)))); /* vec's bits */
+#else
+typedef int32_t ivec __attribute__((vector_size(SM_LANES * sizeof(sm_real))));
+#endif
+
+/* The vector (a, .., a, b, .., b, 0, ..): a in lanes 0..d-1, b in lanes d..2d-1, exactly (bit
+ * selects of two broadcasts, not arithmetic, which would turn -0 into +0). */
+static inline __attribute__((always_inline)) vec vec_pair(sm_real a, sm_real b) {
+    vec va = {0}, vb = {0};
+    ivec lo = {0}, hi = {0};
+    for (int l = 0; l < SM_LANES; l++) {
+        va[l] = a;
+        vb[l] = b;
+        lo[l] = l < D ? -1 : 0;
+        hi[l] = l >= D && l < 2 * D ? -1 : 0;
+    }
+    return (vec)(((ivec)va & lo) | ((ivec)vb & hi));
+}
 
 /* Weights of one particle: per axis, S nodes starting at lb (relative to the particle block's
  * first node, 0..3). */
@@ -105,16 +124,15 @@ static inline __attribute__((always_inline)) void chunk_weights(int S, const dou
     }
 }
 
-static inline __attribute__((always_inline)) void chunk_get(const wchunk *wc, int j, weights *W) {
-    for (int a = 0; a < D; a++) {
-        W->lb[a] = wc->lb[a][j];
-        for (int k = 0; k < 4; k++) {
-            W->w[a][k] = wc->w[a][k][j];
-            W->dw[a][k] = wc->dw[a][k][j];
-            W->dp[a][k] = wc->dp[a][k][j];
-        }
-    }
-}
+/* Particle j's weights, read where chunk_weights stored them (`wc` and `j` in scope), not copied
+ * into a `weights` first: that struct, written value by value, was read back by vector loads,
+ * which store forwarding cannot serve (perf: 10% of G2P's samples on the load after it). With
+ * g2p_dim.c's K from broadcasts, 3D float G2P went from 1.12e7-1.29e7 to 1.38e7-1.45e7 particles/s
+ * on an Intel Xeon; either change alone measured within the noise. */
+#define WC_W(a, k) (wc->w[a][k][j])
+#define WC_DW(a, k) (wc->dw[a][k][j])
+#define WC_DP(a, k) (wc->dp[a][k][j])
+#define WC_LB(a) (wc->lb[a][j])
 
 /* Grid node index of stencil node s (per axis) of a particle of block pb. */
 static inline size_t stencil_node(const sm_pblock *pb, const weights *W, const int *s) {

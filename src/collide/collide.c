@@ -413,10 +413,23 @@ void sm_collider_velocity(const sm_collider *c, int dim, const double x[3], doub
 
 void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3], double dt,
                      double v[3], sm_node_contact *rec) {
+    (void)sm_collide_node_among(cs, NULL, nc, dim, xi, dt, INFINITY, v, rec);
+}
+
+/* |v|^2 > vcap2 (dim components). */
+static int faster_than(const double v[3], int dim, double vcap2) {
+    double s = 0;
+    for (int k = 0; k < dim; k++) s += v[k] * v[k];
+    return s > vcap2;
+}
+
+int sm_collide_node_among(const sm_collider *cs, const int *which, int count, int dim, const double xi[3], double dt,
+                          double vcap2, double v[3], sm_node_contact *rec) {
     SM_ASSERT(dt > 0.0);
     rec->sticky = -1;
     rec->count = 0;
-    for (int b = 0; b < nc; b++) {
+    for (int i = 0; i < count; i++) {
+        const int b = which ? which[i] : i;
         const sm_collider *c = &cs[b];
         double xhat[3];
         for (int k = 0; k < 3; k++) xhat[k] = xi[k] + dt * v[k];
@@ -425,6 +438,7 @@ void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3],
         if (mode == SM_COLLIDE_STICKY && phi0 < 0.0) {
             rec->sticky = b;
             sm_collider_velocity(c, dim, xhat, v);
+            if (faster_than(v, dim, vcap2)) return 1;
             continue;
         }
         double n[3];
@@ -449,8 +463,10 @@ void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3],
                 rec->count++;
             }
             for (int k = 0; k < dim; k++) v[k] -= phihat * n[k] / dt;
+            if (faster_than(v, dim, vcap2)) return 1;
         }
     }
+    return 0;
 }
 
 int sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const sm_node_contact *rec,

@@ -1074,6 +1074,54 @@ static void test_lipschitz(void) {
     printf("signed distances: worst |dphi|/|dx| = %.6f over random pairs (must be <= 1)\n", worst);
 }
 
+/* sm_collide_node_among: a sticky ground y < 0 that moves at 3 m/s along x (collider 0: a
+ * conveyor) and a separating wall x > 0.46 (collider 1); nodes at x <= 0.44 moving slower than
+ * 1 m/s with dt = 0.01 cannot reach the wall (x-hat <= 0.45), so it is left out. Whenever the call
+ * returns 0 its v and contacts equal sm_collide_node's over both. The ground gives the nodes in
+ * it its 3 m/s, with which some reach the wall in the full pass: for those (all faster than the
+ * bound) the call returns 1, and the caller redoes them with all colliders. */
+static sm_collider make_conveyor(void) {
+    sm_collider_def d = sm_collider_def_default();
+    d.shape_count = 1;
+    d.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
+    set3(d.shapes[0].normal, 0, 1, 0);
+    set3(d.velocity, 3.0, 0.0, 0.0);
+    d.mode = SM_COLLIDE_STICKY;
+    sm_collider c;
+    sm_collider_init(&c, &d);
+    return c;
+}
+
+static void test_collide_among(void) {
+    const double dt = 0.01, vcap2 = 1.0;
+    sm_collider cs[2] = {make_conveyor(), make_plane(SM_COLLIDE_SEPARATE, -1.0, 0.0, 0.0, -0.46, 0.0)};
+    for (int b = 0; b < 2; b++) sm_collider_begin_step(&cs[b], 0.0, dt);
+    const int which[1] = {0};
+    unsigned long long rng = 12345;
+    int same = 1, flagged = 0, wall_reached = 0, stuck = 0;
+    for (int k = 0; k < 4000; k++) {
+        const int dim = 2 + (k & 1);
+        double x[3] = {sm_test_uniform(&rng, 0.0, 0.44), sm_test_uniform(&rng, -0.05, 0.05), 0};
+        double v[3] = {0, 0, 0};
+        for (int a = 0; a < dim; a++) v[a] = sm_test_uniform(&rng, -0.57, 0.57); /* |v| < 1 */
+        if (dim == 3) x[2] = sm_test_uniform(&rng, -0.1, 0.1);
+        double va[3] = {v[0], v[1], v[2]}, vf[3] = {v[0], v[1], v[2]};
+        sm_node_contact ra, rf;
+        const int redo = sm_collide_node_among(cs, which, 1, dim, x, dt, vcap2, va, &ra);
+        sm_collide_node(cs, 2, dim, x, dt, vf, &rf);
+        const int equal = memcmp(va, vf, sizeof va) == 0 && ra.sticky == rf.sticky && ra.count == rf.count;
+        wall_reached += rf.count > 0;
+        stuck += rf.sticky == 0;
+        if (redo) flagged++;
+        else same &= equal;
+    }
+    printf("among: %d of 4000 nodes in the moving ground, %d handed back (faster than the bound), %d of them "
+           "reached the wall in the full pass\n", stuck, flagged, wall_reached);
+    CHECK(same);
+    CHECK(stuck > 1000 && flagged == stuck);
+    CHECK(wall_reached > 0 && wall_reached < flagged);
+}
+
 int main(void) {
     test_lipschitz();
     test_defaults();
@@ -1088,6 +1136,7 @@ int main(void) {
     test_collide_moving();
     test_collide_sm_real();
     test_friction();
+    test_collide_among();
     printf("gradients: worst |fd - grad| %.3g, worst ||grad| - 1| %.3g\n", worst_fd, worst_unit);
     return sm_test_summary("test_collide");
 }

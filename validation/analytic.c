@@ -134,10 +134,13 @@ typedef struct column_result {
     double err_mean;   /* the volume mean of sigma_yy against -rho g H / 2 */
     double err_slope;  /* the least-squares slope of the bins' sigma_yy over [0.1 H, 0.9 H] against rho g */
     double ratio, err_ratio;
+    double exx_eyy;    /* the particles' mean lateral log strain over their mean vertical one (exact: 0) */
 } column_result;
 
-/* Cauchy sigma_yy and sigma_xx of a 2D particle from F^E (3.70), and J. */
-static void column_stress(const sm_real *F, double mu_l, double la, double *syy, double *sxx, double *J) {
+/* Cauchy sigma_yy and sigma_xx of a 2D particle from F^E (3.70), J, and the log strains
+ * eps_xx, eps_yy (eps = U diag(ln s) U^T). */
+static void column_stress(const sm_real *F, double mu_l, double la, double *syy, double *sxx, double *J,
+                          double eps[2]) {
     sm_real U[4], V[4], s[2];
     sm_svd2(F, U, s, V);
     const double l0 = log((double)s[0]), l1 = log((double)s[1]);
@@ -145,6 +148,8 @@ static void column_stress(const sm_real *F, double mu_l, double la, double *syy,
     *J = (double)s[0] * (double)s[1];
     *syy = ((double)U[2] * U[2] * t0 + (double)U[3] * U[3] * t1) / *J;
     *sxx = ((double)U[0] * U[0] * t0 + (double)U[1] * U[1] * t1) / *J;
+    eps[0] = (double)U[0] * U[0] * l0 + (double)U[1] * U[1] * l1;
+    eps[1] = (double)U[2] * U[2] * l0 + (double)U[3] * U[3] * l1;
 }
 
 /* Adds a particle's sigma_yy at y to the node rows its quadratic kernel reaches (rows j dx). */
@@ -186,8 +191,9 @@ static void column_errors(const double *acc, const double *rows, int nb, int cel
     r->err_smooth = sqrt(e2 / x2);
 }
 
-/* Elastic column at `cells` cells over its height (transfer: APIC, or PIC, which brings it to rest). */
-static void column_run(int cells, int shifted, sm_transfer transfer, column_result *res) {
+/* Elastic column at `cells` cells over its height, ppc particles per cell (transfer: APIC, or PIC,
+ * which brings it to rest). */
+static void column_run(int cells, int shifted, sm_transfer transfer, int ppc, column_result *res) {
     const double H = 1.0, W = 0.25, dx = H / cells, nu = 0.3, E = 1e7, rho = 1000;
     sm_world_def def = sm_world_def_default();
     def.dim = 2;
@@ -222,7 +228,7 @@ static void column_run(int cells, int shifted, sm_transfer transfer, column_resu
     box.half_extent[0] = W / 2, box.half_extent[1] = H / 2;
     sm_seed_def sd = sm_seed_def_default();
     sd.material = mat;
-    sd.ppc = 4;
+    sd.ppc = ppc;
     if (sm_world_seed_shape(w, &box, &sd, NULL) != SM_OK) fail("seed", w);
     double mu_l, la;
     sm_lame(E, nu, &mu_l, &la);
@@ -233,13 +239,15 @@ static void column_run(int cells, int shifted, sm_transfer transfer, column_resu
     double *rows = calloc((size_t)nb * 2, sizeof *rows); /* per node row: sum w syy, sum w */
     if (!acc || !rows) exit(5);
     double vol_syy = 0, vol = 0; /* sum J syy, sum J: particle volumes are V0 J */
+    double exx = 0, eyy = 0;      /* sums of the particles' eps_xx, eps_yy */
     for (int k = 0; k < ns; k++) {
         if (sm_world_advance(w, t0 + k * T1 / 25) != SM_OK) fail("advance", w);
         sm_particles_view pv;
         sm_world_particles(w, &pv);
         for (size_t i = 0; i < pv.n; i++) {
-            double syy, sxx, J;
-            column_stress(pv.F + 4 * i, mu_l, la, &syy, &sxx, &J);
+            double syy, sxx, J, eps[2];
+            column_stress(pv.F + 4 * i, mu_l, la, &syy, &sxx, &J, eps);
+            exx += eps[0], eyy += eps[1];
             const double y = (double)pv.x[2 * i + 1];
             vol_syy += J * syy, vol += J;
             column_smooth_add(rows, nb, y, dx, syy);
@@ -250,23 +258,26 @@ static void column_run(int cells, int shifted, sm_transfer transfer, column_resu
         res->particles = pv.n;
     }
     column_errors(acc, rows, nb, cells, H, dx, rho, nu, vol_syy, vol, res);
+    res->exx_eyy = exx / eyy;
     free(acc);
     free(rows);
     sm_world_destroy(w);
 }
 
 static void column(int quick) {
-    printf("walls,transfer,cells,dx,particles,err_syy,err_smooth,err_mean,err_slope,ratio_mean,ratio_exact,err_ratio\n");
+    printf("walls,transfer,ppc,cells,dx,particles,err_syy,err_smooth,err_mean,err_slope,ratio_mean,ratio_exact,"
+           "err_ratio,exx_eyy\n");
     const int cells[] = {8, 16, 32, 64};
-    /* walls (1 shifted), transfer (0 APIC, 1 PIC), resolutions (the first nres of cells) */
-    const int runs[][3] = {{1, 0, 4}, {0, 0, 4}, {1, 1, 3}};
-    for (int k = 0; k < (quick ? 1 : 3); k++)
-        for (int i = 0; i < (quick ? 2 : runs[k][2]); i++) {
+    /* walls (1 shifted), transfer (0 APIC, 1 PIC), particles per cell, resolutions (the first
+     * nres of cells, from the first'th) */
+    const int runs[][5] = {{1, 0, 4, 0, 4}, {0, 0, 4, 0, 4}, {1, 1, 4, 0, 3}, {1, 0, 9, 1, 2}};
+    for (int k = 0; k < (quick ? 1 : 4); k++)
+        for (int i = runs[k][3]; i < (quick ? 2 : runs[k][3] + runs[k][4]); i++) {
             column_result r;
-            column_run(cells[i], runs[k][0], runs[k][1] ? SM_TRANSFER_PIC : SM_TRANSFER_APIC, &r);
-            printf("%s,%s,%d,%g,%zu,%.4g,%.4g,%.4g,%.4g,%.5f,%.5f,%.4g\n", runs[k][0] ? "shifted" : "on_grid_lines",
-                   runs[k][1] ? "pic" : "apic", cells[i], 1.0 / cells[i], r.particles, r.err_bins, r.err_smooth,
-                   r.err_mean, r.err_slope, r.ratio, 0.3 / 0.7, r.err_ratio);
+            column_run(cells[i], runs[k][0], runs[k][1] ? SM_TRANSFER_PIC : SM_TRANSFER_APIC, runs[k][2], &r);
+            printf("%s,%s,%d,%d,%g,%zu,%.4g,%.4g,%.4g,%.4g,%.5f,%.5f,%.4g,%.4g\n", runs[k][0] ? "shifted" : "on_grid_lines",
+                   runs[k][1] ? "pic" : "apic", runs[k][2], cells[i], 1.0 / cells[i], r.particles, r.err_bins,
+                   r.err_smooth, r.err_mean, r.err_slope, r.ratio, 0.3 / 0.7, r.err_ratio, r.exx_eyy);
             fflush(stdout);
         }
 }

@@ -192,7 +192,7 @@ def plot_column(res, pdir):
     rows = res.get("analytic", {}).get("column", [])
     if not rows:
         return None
-    rows = [r for r in rows if r["walls"] == "shifted" and r.get("transfer", "apic") == "apic"]
+    rows = [r for r in rows if r["walls"] == "shifted" and r.get("transfer", "apic") == "apic" and int(r.get("ppc", 4)) == 4]
     write_dat(os.path.join(pdir, "column.dat"), rows, [lambda r: r["dx"], lambda r: r["err_syy"], lambda r: r["err_ratio"],
                                                        lambda r: r["err_smooth"], lambda r: abs(r["err_mean"])])
     gnuplot("""set terminal pngcairo size 460,360 font ',9'

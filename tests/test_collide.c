@@ -1081,10 +1081,7 @@ static void test_lipschitz(void) {
  * it its 3 m/s, with which some reach the wall in the full pass: for those (all faster than the
  * bound) the call returns 1, and the caller redoes them with all colliders. */
 static sm_collider make_conveyor(void) {
-    sm_collider_def d = sm_collider_def_default();
-    d.shape_count = 1;
-    d.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
-    set3(d.shapes[0].normal, 0, 1, 0);
+    sm_collider_def d = sm_test_ground(0.0);
     set3(d.velocity, 3.0, 0.0, 0.0);
     d.mode = SM_COLLIDE_STICKY;
     sm_collider c;

@@ -21,11 +21,7 @@ static uint64_t run(int dim, int threads, double *emitted, double *mass, double 
     m.friction_angle = 30;
     int mat = -1;
     CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
-    sm_collider_def g = sm_collider_def_default();
-    g.shape_count = 1;
-    g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
-    g.shapes[0].center[1] = 0.1;
-    g.shapes[0].normal[1] = 1;
+    sm_collider_def g = sm_test_ground(0.1);
     CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
     sm_emitter_def e = sm_emitter_def_default();
     e.shape = sm_shape_default(SM_SHAPE_CYLINDER);

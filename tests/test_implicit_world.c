@@ -53,11 +53,7 @@ static sm_world *blocks(int dim, sm_integrator integ, int sand, double max_dt, i
     sd.material = mat;
     sd.ppc = dim == 2 ? 4 : 8;
     if (ground) {
-        sm_collider_def g = sm_collider_def_default();
-        g.shape_count = 1;
-        g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
-        g.shapes[0].center[1] = 0.1;
-        g.shapes[0].normal[1] = 1;
+        sm_collider_def g = sm_test_ground(0.1);
         g.mode = SM_COLLIDE_STICKY;
         CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
         b.center[0] = 0.5;

@@ -24,11 +24,7 @@ static sm_world *build(void) {
     sm_material_def m = sm_material_def_sand();
     int mat = -1;
     CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
-    sm_collider_def g = sm_collider_def_default();
-    g.shape_count = 1;
-    g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
-    g.shapes[0].center[1] = 0.1;
-    g.shapes[0].normal[1] = 1;
+    sm_collider_def g = sm_test_ground(0.1);
     CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
     sm_shape box = sm_shape_default(SM_SHAPE_BOX);
     box.center[0] = 0.5, box.center[1] = 0.3;

@@ -82,11 +82,7 @@ static double plate_push(const char *name, double speed, int threads, uint64_t *
     sm_material_def m = sm_material_def_sand();
     int mat = 0;
     CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
-    sm_collider_def g = sm_collider_def_default();
-    g.shape_count = 1;
-    g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
-    g.shapes[0].center[1] = 0.1;
-    g.shapes[0].normal[1] = 1;
+    sm_collider_def g = sm_test_ground(0.1);
     g.mode = SM_COLLIDE_SLIP;
     g.friction = 0.3;
     CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);

@@ -164,11 +164,7 @@ static double plate_push(int scripted, int threads, uint64_t *hash) {
     const double hi[3] = {1.0, 0.5, 0.4}, dx = 0.02, he[3] = {0.03, 0.1, 0.15};
     int mat = 0;
     sm_world *w = sand_world(hi, dx, threads, &mat);
-    sm_collider_def g = sm_collider_def_default();
-    g.shape_count = 1;
-    g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
-    g.shapes[0].center[1] = 0.1;
-    g.shapes[0].normal[1] = 1;
+    sm_collider_def g = sm_test_ground(0.1);
     g.mode = SM_COLLIDE_SLIP;
     g.friction = 0.3;
     CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);

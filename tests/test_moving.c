@@ -50,11 +50,7 @@ int main(void) {
         /* (1) conveyor */
         int mat = 0;
         sm_world *w = world(dim, &mat, 0);
-        sm_collider_def g = sm_collider_def_default();
-        g.shape_count = 1;
-        g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
-        g.shapes[0].center[1] = 0.1;
-        g.shapes[0].normal[1] = 1;
+        sm_collider_def g = sm_test_ground(0.1);
         g.mode = SM_COLLIDE_STICKY;
         g.velocity[0] = 0.3;
         CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);

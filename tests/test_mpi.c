@@ -38,11 +38,7 @@ static sm_world *build(int dim, int threads, size_t *ball_id) {
     CHECK(sm_world_add_material(w, &m, &sand) == SM_OK);
     sm_material_def e = sm_material_def_elastic();
     CHECK(sm_world_add_material(w, &e, &ball) == SM_OK);
-    sm_collider_def g = sm_collider_def_default();
-    g.shape_count = 1;
-    g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
-    g.shapes[0].center[1] = 0.1;
-    g.shapes[0].normal[1] = 1;
+    sm_collider_def g = sm_test_ground(0.1);
     g.mode = SM_COLLIDE_SLIP;
     g.friction = 0.4;
     CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);

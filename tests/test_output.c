@@ -60,11 +60,7 @@ static sm_world *make(int dim) {
     sm_material_def e = sm_material_def_elastic();
     int el = -1;
     CHECK(sm_world_add_material(w, &e, &el) == SM_OK);
-    sm_collider_def g = sm_collider_def_default();
-    g.shape_count = 1;
-    g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
-    g.shapes[0].center[1] = 0.2;
-    g.shapes[0].normal[1] = 1;
+    sm_collider_def g = sm_test_ground(0.2);
     CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
     sm_shape b = sm_shape_default(SM_SHAPE_BOX);
     b.center[0] = b.center[2] = 0.5;

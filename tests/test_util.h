@@ -8,6 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "sandmpm/sandmpm.h"
+
 static int sm_test_checks = 0, sm_test_failures = 0;
 
 #define CHECK(cond)                                                                          \
@@ -60,6 +62,17 @@ static inline unsigned long long sm_test_rng_next(unsigned long long *s) {
 /* Uniform in [lo, hi). */
 static inline double sm_test_uniform(unsigned long long *s, double lo, double hi) {
     return lo + (hi - lo) * (double)(sm_test_rng_next(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* A default collider holding one horizontal ground: the half-space y < y0 (mode, friction and
+ * motion as sm_collider_def_default gives them). */
+static inline sm_collider_def sm_test_ground(double y0) {
+    sm_collider_def g = sm_collider_def_default();
+    g.shape_count = 1;
+    g.shapes[0] = sm_shape_default(SM_SHAPE_HALFSPACE);
+    g.shapes[0].center[1] = y0;
+    g.shapes[0].normal[1] = 1;
+    return g;
 }
 
 /* A growing memory buffer for sm_world_save (sm_write_fn: 0 is success). */

@@ -373,11 +373,6 @@ static int run_command(int argc, char **argv) {
         snprintf(outbuf, sizeof outbuf, "out/%s", a.so.scene ? set->name : "default");
         out = outbuf;
     }
-    if (st == SM_OK && cli_ranks_count() > 1 && sm_world_get_def(sm_scene_world(sc))->integrator == SM_INTEGRATOR_IMPLICIT) {
-        fprintf(stderr, "sandmpm run: the scene uses the implicit integrator, which does not run across MPI ranks yet "
-                        "(issue 19); run it without mpirun, or with integrator = \"explicit\"\n");
-        st = SM_ERR_INVALID;
-    }
     st = cli_ranks_worst(st); /* e.g. one rank's machine without the memory */
     if (st == SM_OK && cli_rank() == 0) st = prepare_folder(out);
     const uint64_t hash = scene_hash(&a.so);

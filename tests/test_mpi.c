@@ -25,11 +25,15 @@
 
 static int rank, ranks;
 
-static sm_world *build(int dim, int threads, size_t *ball_id) {
+static sm_world *build(int dim, int threads, size_t *ball_id, int implicit) {
     sm_world_def def = sm_world_def_default();
     def.dim = dim;
-    def.dx = dim == 2 ? 0.01 : 0.04;
+    def.dx = dim == 2 ? (implicit ? 0.02 : 0.01) : 0.04;
     def.threads = threads;
+    if (implicit) {
+        def.integrator = SM_INTEGRATOR_IMPLICIT;
+        def.gmres_preconditioner = dim == 3; /* both solver paths */
+    }
     sm_world *w = NULL;
     char err[256];
     if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) return NULL;
@@ -147,7 +151,7 @@ static void run(int dim) {
     /* One rank, two threads: the reference. */
     uint64_t ref[1] = {0};
     if (rank == 0) {
-        sm_world *w = build(dim, 2, &ball_id);
+        sm_world *w = build(dim, 2, &ball_id, 0);
         CHECK(w != NULL);
         for (int f = 1; f <= FRAMES && w; f++) CHECK(sm_world_advance(w, f * FRAME_DT) == SM_OK);
         ref[0] = sm_world_id_hash(w);
@@ -155,7 +159,7 @@ static void run(int dim) {
     }
     MPI_Bcast(ref, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
 
-    sm_world *w = build(dim, 1, &ball_id);
+    sm_world *w = build(dim, 1, &ball_id, 0);
     CHECK(w != NULL);
     if (!w) return;
     const uint64_t h_start = sm_world_id_hash(w);
@@ -216,12 +220,64 @@ static void run(int dim) {
     sm_world_destroy(w);
 }
 
+/* The implicit integrator on N ranks: the one-rank bits (2 threads there, 1 per rank here), the
+ * Newton and GMRES counts of rank 0 equal to the one-rank run's, and grid traffic between ranks. */
+static void run_implicit(int dim, int frames) {
+    size_t ball_id = 0;
+    uint64_t ref[3] = {0, 0, 0};
+    if (rank == 0) {
+        sm_world *w = build(dim, 2, &ball_id, 1);
+        CHECK(w != NULL);
+        for (int f = 1; f <= frames && w; f++) CHECK(sm_world_advance(w, f * FRAME_DT) == SM_OK);
+        sm_diagnostics dg;
+        sm_world_diagnostics(w, &dg);
+        ref[0] = sm_world_id_hash(w);
+        ref[1] = dg.newton_iterations;
+        ref[2] = dg.gmres_iterations;
+        sm_world_destroy(w);
+    }
+    MPI_Bcast(ref, 3, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+    sm_world *w = build(dim, 1, &ball_id, 1);
+    CHECK(w != NULL);
+    if (!w) return;
+    CHECK(sm_world_distribute(w, MPI_COMM_WORLD) == SM_OK);
+    size_t halo_bytes = 0;
+    for (int f = 1; f <= frames; f++) {
+        const sm_status st = sm_world_advance(w, f * FRAME_DT);
+        CHECK(st == SM_OK);
+        if (st != SM_OK) {
+            fprintf(stderr, "rank %d: %s\n", rank, sm_world_errmsg(w));
+            break;
+        }
+        sm_dist_stats ds;
+        sm_world_dist_stats(w, &ds);
+        halo_bytes += ds.halo_bytes_sent;
+    }
+    sm_diagnostics dg;
+    sm_world_diagnostics(w, &dg);
+    const uint64_t h = sm_world_id_hash(w);
+    size_t all_halo = 0;
+    MPI_Allreduce(&halo_bytes, &all_halo, 1, MPI_UNSIGNED_LONG, MPI_SUM, MPI_COMM_WORLD);
+    if (rank == 0)
+        printf("%dD implicit on %d ranks: id hash %016llx (one rank, 2 threads: %016llx), Newton %llu (%llu), GMRES %llu "
+               "(%llu), grid halo %zu bytes sent by all ranks\n",
+               dim, ranks, (unsigned long long)h, (unsigned long long)ref[0], (unsigned long long)dg.newton_iterations,
+               (unsigned long long)ref[1], (unsigned long long)dg.gmres_iterations, (unsigned long long)ref[2], all_halo);
+    CHECK(h == ref[0]);
+    CHECK(dg.newton_iterations == ref[1] && dg.gmres_iterations == ref[2]);
+    CHECK(dg.newton_iterations > 0);
+    if (ranks >= 2) CHECK(all_halo > 0);
+    sm_world_destroy(w);
+}
+
 int main(int argc, char **argv) {
     MPI_Init(&argc, &argv);
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);
     run(2);
     run(3);
+    run_implicit(2, 3);
+    run_implicit(3, 2);
     int mine = sm_test_failures, all = 0;
     MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     MPI_Finalize();

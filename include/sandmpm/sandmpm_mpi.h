@@ -12,8 +12,8 @@
  * each rank keeps the ones in its blocks. sm_world_particles and sm_world_diagnostics report the
  * calling rank's particles. sm_world_save is collective: rank 0 writes one checkpoint of the whole
  * run (every particle, in id order), which resumes on any number of ranks (sm_world_load on each,
- * then sm_world_distribute) or on none. Not yet across ranks: the implicit integrator
- * (sm_world_distribute refuses an implicit world). */
+ * then sm_world_distribute) or on none. The implicit integrator runs across ranks too, with the
+ * same bits (its inner products are exact sums: the same on any number of ranks). */
 #ifndef SANDMPM_MPI_H
 #define SANDMPM_MPI_H
 
@@ -34,7 +34,8 @@ SM_API sm_status sm_world_distribute(sm_world *w, MPI_Comm comm);
 /** What the decomposition did: this rank and the number of ranks, this rank's particles, the
  * largest and the mean particle count over the ranks after the last step's migration, the
  * re-balancings, and this rank's traffic of the last step (ghost and migrating particles sent,
- * bytes and messages). */
+ * bytes and messages; with the implicit integrator also the grid node vectors sent to other
+ * ranks: bytes, messages and refreshes of the last step). */
 typedef struct sm_dist_stats {
     int rank, ranks;
     size_t particles;
@@ -43,6 +44,7 @@ typedef struct sm_dist_stats {
     uint64_t rebalances;
     size_t ghosts_sent, migrated_sent;
     size_t bytes_sent, messages_sent;
+    size_t halo_bytes_sent, halo_messages_sent, halo_refreshes; /* implicit: grid node vectors to other ranks */
 } sm_dist_stats;
 
 /** Fills *out (collective only at sm_world_distribute; here local). 0 if w is not distributed. */

@@ -281,6 +281,7 @@ void sm_dist_free(sm_dist *d) {
     free(d->cuts);
     free(d->hist);
     free(d->scratch);
+    sm_dist_halo_free(d->halo);
     MPI_Comm_free(&d->comm);
     free(d);
 }
@@ -314,9 +315,6 @@ static sm_dist *dist_create(const sm_world *w, MPI_Comm comm) {
 
 sm_status sm_world_distribute(sm_world *w, MPI_Comm comm) {
     if (w->dist) return sm_world_fail(w, SM_ERR_INVALID, "sm_world_distribute: the world is distributed already");
-    if (w->def.integrator == SM_INTEGRATOR_IMPLICIT)
-        return sm_world_fail(w, SM_ERR_INVALID,
-                             "sm_world_distribute: the implicit integrator does not run across ranks yet (issue 19)");
     uint64_t h[2] = {sm_world_state_hash(w), (uint64_t)w->p.n}, lo[2], hi[2];
     MPI_Allreduce(h, lo, 2, MPI_UINT64_T, MPI_MIN, comm);
     MPI_Allreduce(h, hi, 2, MPI_UINT64_T, MPI_MAX, comm);

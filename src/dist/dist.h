@@ -23,6 +23,7 @@
 #include "core/step_ctx.h"
 
 struct sm_world;
+struct sm_imp_ranks;
 typedef struct sm_dist sm_dist;
 
 /* The largest rank's particles over the mean that triggers a re-cut, and the fewest steps between
@@ -36,6 +37,9 @@ typedef struct sm_dist sm_dist;
 #if SM_HAVE_MPI
 /* Migration, re-balancing and ghosts (collective). */
 sm_status sm_dist_exchange(struct sm_world *w, const sm_step_ctx *c);
+/* The implicit solve's traffic for this step's live grid blocks (halo.c; collective, after the
+ * binning): *out for sm_implicit_sys.ranks. */
+sm_status sm_dist_halo_plan(struct sm_world *w, const struct sm_imp_ranks **out);
 /* Drops the ghosts; reorders this rank's particles by block when they are scattered. */
 void sm_dist_end_step(struct sm_world *w);
 /* Keeps, of particles [first, n) (added on every rank alike), those in this rank's blocks. */
@@ -59,6 +63,11 @@ void sm_dist_free(sm_dist *d);
 void sm_dist_set_piece_bytes(struct sm_world *w, size_t bytes);
 #else
 static inline sm_status sm_dist_exchange(struct sm_world *w, const sm_step_ctx *c) { (void)w; (void)c; return SM_OK; }
+static inline sm_status sm_dist_halo_plan(struct sm_world *w, const struct sm_imp_ranks **out) {
+    (void)w;
+    *out = NULL;
+    return SM_OK;
+}
 static inline void sm_dist_end_step(struct sm_world *w) { (void)w; }
 static inline void sm_dist_adopt(struct sm_world *w, size_t first) { (void)w; (void)first; }
 static inline size_t sm_dist_owned(const struct sm_world *w) { (void)w; return 0; }

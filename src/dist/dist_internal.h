@@ -8,6 +8,8 @@
 #include "dist/dist.h"
 #include "sandmpm/sandmpm_mpi.h"
 
+typedef struct sm_dist_halo sm_dist_halo; /* halo.c: the implicit solve's grid traffic */
+
 /* A growing byte buffer: packed particles (particles.h's sm_particles_pack) for one rank. */
 typedef struct sm_dist_buf {
     unsigned char *data;
@@ -33,6 +35,7 @@ struct sm_dist {
     uint32_t *scratch;        /* the owned particles' order for a reorder */
     size_t scratch_cap;
     int since_recut;          /* steps since the last cut */
+    sm_dist_halo *halo;       /* NULL until an implicit step */
     sm_dist_stats stats;
 };
 
@@ -54,6 +57,7 @@ void sm_dist_particle_block(const sm_dist *d, const double *x, int b[3]);
 int sm_dist_owner(const sm_dist *d, uint64_t m);
 /* Grows buf to hold `need` bytes; 0 when out of memory. */
 int sm_dist_buf_reserve(sm_dist_buf *buf, size_t need);
+void sm_dist_halo_free(sm_dist_halo *h);
 /* Re-cuts the blocks by the particles every rank holds in [0, owned) (collective). */
 sm_status sm_dist_recut(struct sm_world *w);
 

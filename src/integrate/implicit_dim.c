@@ -25,21 +25,24 @@
 #include "integrate/implicit_solver.h"
 
 /* The workspace's mass and v^n from P2G's mass and momentum (v^n also into the grid for FLIP);
- * returns the total mass. */
+ * returns the total mass (of every rank's blocks). */
 static double load_grid(const sm_implicit_io *io, const sm_implicit_sys *s) {
     sm_implicit_ws *ws = s->ws;
-    double msum = 0;
-    for (size_t l = 0; l < s->nodes; l++) {
-        sm_real m = io->in.mass[l];
-        ws->mass[l] = m > 0 ? m : 0;
-        msum += (double)ws->mass[l];
-        for (int a = 0; a < D; a++) {
-            sm_real vn = m > 0 ? io->in.momentum[l * D + a] / m : 0;
-            if (io->out.vn) io->out.vn[l * D + a] = vn;
-            ws->vn[l * D + a] = vn;
+    for (size_t t = 0; t < s->grid->nactive; t++) {
+        double msum = 0;
+        for (size_t l = t * BN; l < (t + 1) * BN; l++) {
+            sm_real m = io->in.mass[l];
+            ws->mass[l] = m > 0 ? m : 0;
+            msum += (double)ws->mass[l];
+            for (int a = 0; a < D; a++) {
+                sm_real vn = m > 0 ? io->in.momentum[l * D + a] / m : 0;
+                if (io->out.vn) io->out.vn[l * D + a] = vn;
+                ws->vn[l * D + a] = vn;
+            }
         }
+        ws->partial[t] = msum;
     }
-    return msum;
+    return SM_FN(sm_imp_block_sum)(s);
 }
 
 /* ws->z = the initial guess (collided). COUPLED_SOLVE starts from the explicit predictor
@@ -204,6 +207,9 @@ static void finish(const sm_implicit_io *io, const sm_implicit_sys *s) {
     SM_FN(sm_imp_collide)(s, vcollided); /* the contacts of this call drive FRICTION */
     SM_FN(sm_grid_friction_after_solve)(&s->colliders, s->grid, s->c, s->nodes, ws->contact, ws->z, vstar,
                                         vcollided, io->out.vbar, io->out.vtilde);
+    /* Across ranks G2P reads blocks of other ranks too, but no refresh is needed: z was refreshed
+     * by the force evaluation above, and v* (so v-tilde) sums over every particle of each block an
+     * owned particle reads (those blocks are complete here: dist.h). */
 }
 
 static sm_implicit_sys system_of(const sm_implicit_io *io, const sm_step_ctx *c) {
@@ -215,8 +221,9 @@ static sm_implicit_sys system_of(const sm_implicit_io *io, const sm_step_ctx *c)
 
 sm_status SM_FN(sm_implicit_solve)(const sm_implicit_io *io, const sm_step_ctx *c) {
     const sm_implicit_sys s = system_of(io, c);
-    if (sm_implicit_ws_reserve(s.ws, D, s.nodes, s.grid->nactive, s.n, io->gmres_max_iterations) != SM_OK)
-        return SM_ERR_NOMEM;
+    int no_room = sm_implicit_ws_reserve(s.ws, D, s.nodes, s.grid->nactive, s.n, io->gmres_max_iterations) != SM_OK;
+    if (s.ranks) no_room = s.ranks->max_int(s.ranks->ctx, no_room); /* every rank returns, or none */
+    if (no_room) return SM_ERR_NOMEM;
     const double msum = load_grid(io, &s);
     initial_guess(&s);
     int converged = 0;

@@ -12,8 +12,10 @@
  *   J dz = P(dz' + (dt^2/m) sum_p apply_p(sum_i dz'_i grad w_ip^T) grad w_ip),  dz' = P dz,
  * with apply_p from Algorithm 8's per-particle precompute (sm_implicit_apply). FORCE_INCREMENT_VEL
  * gives v* = v^n + dt g - (dt/m) sum_p G_p(z) grad w_ip.
- * Dot products are mass-weighted, summed per live block and then in block order: bitwise the
- * same for any thread count. Scatters use P2G's colour schedule. */
+ * Dot products are mass-weighted, summed per live block in node order and then exactly over the
+ * blocks (math/xsum.h): bitwise the same for any thread count and, across MPI ranks (each
+ * summing the blocks it owns, sm_imp_ranks), for any rank count. Scatters use P2G's colour
+ * schedule. */
 #include "core/dim.h"
 
 #include <string.h>
@@ -35,9 +37,22 @@ double SM_FN(sm_imp_dot)(const sm_implicit_sys *s, const sm_real *a, const sm_re
         }
         ws->partial[t] = sum;
     }
-    double sum = 0;
-    for (long t = 0; t < nb; t++) sum += ws->partial[t];
-    return sum;
+    return SM_FN(sm_imp_block_sum)(s);
+}
+
+double SM_FN(sm_imp_block_sum)(const sm_implicit_sys *s) {
+    const sm_imp_ranks *r = s->ranks;
+    sm_xsum acc;
+    sm_xsum_init(&acc);
+    for (size_t t = 0; t < s->grid->nactive; t++)
+        if (!r || r->owned[t]) sm_xsum_add(&acc, s->ws->partial[t]);
+    if (r) r->sum(r->ctx, &acc);
+    return sm_xsum_value(&acc);
+}
+
+/* Refreshes v's blocks owned by other ranks (a distributed solve) before a gather reads it. */
+static void refresh(const sm_implicit_sys *s, sm_real *v) {
+    if (s->ranks) s->ranks->refresh(s->ranks->ctx, v);
 }
 
 /* Particle p's T = sum_i z_i grad w^T from a grid vector (p of particle block pb). */
@@ -147,7 +162,8 @@ static void particle_force(const sm_implicit_sys *s, const void *arg, size_t p, 
     else sm_implicit_force_matrix(D, s->F + p * DD, dt, T, s->vol0[p], &im, ws->G + p * DD);
 }
 
-void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, const sm_real *z, int pre) {
+void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, sm_real *z, int pre) {
+    refresh(s, z);
     const forces_arg fa = {z, pre};
     for_particles(s, particle_force, &fa);
     scatter(s, s->ws->G, s->ws->force);
@@ -205,7 +221,7 @@ void SM_FN(sm_imp_residual)(const sm_implicit_sys *s, const sm_real *z, sm_real 
     }
 }
 
-void SM_FN(sm_imp_force_increment)(const sm_implicit_sys *s, const sm_real *z, sm_real *vstar) {
+void SM_FN(sm_imp_force_increment)(const sm_implicit_sys *s, sm_real *z, sm_real *vstar) {
     const sm_implicit_ws *ws = s->ws;
     const sm_real dt = (sm_real)s->c->dt;
     const sm_real *g = s->c->gravity;
@@ -236,12 +252,10 @@ double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z) {
         }
         ws->partial[t] = sum;
     }
-    double sum = 0;
-    for (long t = 0; t < nb; t++) sum += ws->partial[t];
-    return sum;
+    return SM_FN(sm_imp_block_sum)(s);
 }
 
-double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, const sm_real *z, sm_real *y) {
+double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, sm_real *z, sm_real *y) {
     SM_FN(sm_imp_forces)(s, z, 0);
     SM_FN(sm_imp_residual)(s, z, y);
     SM_FN(sm_imp_project)(s, y, 1);
@@ -261,6 +275,7 @@ void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_rea
     sm_implicit_ws *ws = s->ws;
     memcpy(px, x, s->nodes * D * sizeof(sm_real));
     SM_FN(sm_imp_project)(s, px, 0);
+    refresh(s, px); /* P x: other ranks' contacts project their blocks */
     for_particles(s, particle_hessian, px);
     scatter(s, ws->G, out);
     const sm_real dt2 = (sm_real)(s->c->dt * s->c->dt);

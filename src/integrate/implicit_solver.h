@@ -16,6 +16,7 @@
 #include "grid/bin.h"
 #include "material/implicit.h"
 #include "material/material_rt.h"
+#include "math/xsum.h"
 
 /* One rounding of sm_real. */
 #if SM_DOUBLE
@@ -77,6 +78,21 @@ typedef struct sm_implicit_stats {
     double hist[64];             /* residual (m/s^2) of each Newton step of the last solve */
 } sm_implicit_stats;
 
+/* A distributed solve's traffic (dist/halo.c; NULL on one rank). Every node vector is stored on
+ * all of this rank's live blocks, but only the blocks it owns hold the solve's values (their
+ * particles are all here: owned or ghosts); elsewhere the per-node operations leave whatever
+ * they compute. So the operators that read neighbouring nodes (the particle gathers of
+ * sm_imp_forces and TIMES_DIFF) first refresh their input's other blocks from their owners, the
+ * inner products count owned blocks only (exact sums, added over the ranks). Every call is
+ * collective: the ranks run the same iterations, as their inner products are the same bits. */
+typedef struct sm_imp_ranks {
+    void *ctx;
+    const unsigned char *owned;            /* per live block: 1 where this rank owns it */
+    void (*refresh)(void *ctx, sm_real *v); /* v (d per node) on the blocks owned elsewhere, from their owners */
+    void (*sum)(void *ctx, sm_xsum *acc);   /* acc summed over the ranks, in place */
+    int (*max_int)(void *ctx, int v);       /* the largest v over the ranks */
+} sm_imp_ranks;
+
 /* What the system reads: the particles at the step start, their binning, the live grid and the
  * colliders (the operators of implicit_ops_dim.c take this and vectors, nothing else). */
 typedef struct sm_implicit_sys {
@@ -91,6 +107,7 @@ typedef struct sm_implicit_sys {
     size_t nodes;                /* node vectors' length: live blocks * 4^d */
     sm_grid_colliders colliders;
     sm_implicit_ws *ws;          /* mass, vn, contacts, pp, G, force, partial */
+    const sm_imp_ranks *ranks;   /* NULL on one rank */
 } sm_implicit_sys;
 
 /* The implicit stage: reads P2G's mass and momentum (P2G without force), writes v^n (FLIP
@@ -117,19 +134,23 @@ sm_status SM_FN(sm_implicit_solve)(const sm_implicit_io *io, const sm_step_ctx *
 double SM_FN(sm_implicit_jvp_check)(const sm_implicit_io *io, const sm_step_ctx *c, uint64_t seed, double vscale,
                                     double h);
 
-/* The operators (implicit_ops_dim.c). Vectors have s->nodes nodes. */
+/* The operators (implicit_ops_dim.c). Vectors have s->nodes nodes. Those taking a non-const z
+ * refresh its blocks owned by other ranks (sm_imp_ranks) before they read it. */
 double SM_FN(sm_imp_dot)(const sm_implicit_sys *s, const sm_real *a, const sm_real *b);
+/* The sum of ws->partial over the live blocks this rank owns, over all ranks: exact, so the same
+ * bits whatever the order, thread count or rank count (math/xsum.h). */
+double SM_FN(sm_imp_block_sum)(const sm_implicit_sys *s);
 /* G_p at velocities z for every particle (and Algorithm 8's precompute if pre), then
  * ws->force = sum_p G_p grad w_ip. */
-void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, const sm_real *z, int pre);
+void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, sm_real *z, int pre);
 /* y = z - v^n - dt g + (dt/m) ws->force, nodes with mass (0 elsewhere). */
 void SM_FN(sm_imp_residual)(const sm_implicit_sys *s, const sm_real *z, sm_real *y);
 /* The contact projection P (sticky rows to zero, normals removed); prune: PRUNE_COLLISIONS. */
 void SM_FN(sm_imp_project)(const sm_implicit_sys *s, sm_real *y, int prune);
 /* vstar = v^n + FORCE_INCREMENT_VEL(z) = v^n + dt g - (dt/m) sum_p G_p(z) grad w. */
-void SM_FN(sm_imp_force_increment)(const sm_implicit_sys *s, const sm_real *z, sm_real *vstar);
+void SM_FN(sm_imp_force_increment)(const sm_implicit_sys *s, sm_real *z, sm_real *vstar);
 /* NONLINEAR_FUNCTION at z (collided): y = the pruned residual; returns sum m |y|^2. */
-double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, const sm_real *z, sm_real *y);
+double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, sm_real *z, sm_real *y);
 /* TIMES_DIFF (Algorithm 6) at the last precompute: out = J x. px: scratch for P x; overwrites
  * ws->G with the Hessian products. */
 void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_real *out, sm_real *px);

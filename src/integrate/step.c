@@ -149,6 +149,10 @@ static sm_status grid_velocities(sm_world *w, const sm_step_ctx *c) {
     }
     sm_implicit_io io = implicit_io(w);
     io.may_reject = c->dt > SM_IMPLICIT_REJECT_FRACTION * w->def.max_dt;
+    if (w->dist) { /* the halo plan fails on every rank or none */
+        const sm_status plan = sm_dist_halo_plan(w, &io.sys.ranks);
+        if (plan != SM_OK) return plan;
+    }
     const sm_status st = w->stages->implicit_solve(&io, c);
     if (st == SM_ERR_NOMEM)
         return sm_world_fail(w, SM_ERR_NOMEM, "implicit integrator: out of memory for %zu grid nodes",
@@ -238,7 +242,9 @@ static sm_status check_start(sm_world *w, double dt) {
 static sm_status step_particles(sm_world *w, const sm_step_ctx *c) {
     double t = sm_seconds();
     if (w->dist) STAGE(w, &t, SM_STAGE_EXCHANGE, sm_dist_exchange(w, c)); /* migration, ghosts */
-    const int any = w->p.n > 0; /* always on one rank; a distributed rank may hold none */
+    /* Always on one rank; a distributed rank may hold none (and skips the stages), except in an
+     * implicit step: its solve is collective, every rank takes part (with no grid if need be). */
+    const int any = w->p.n > 0 || (w->dist && w->def.integrator == SM_INTEGRATOR_IMPLICIT);
     if (any) {
         STAGE(w, &t, SM_STAGE_SORT, bin_particles(w, c)); /* 2 */
         p2g(w, c);                                        /* 3 */

@@ -70,6 +70,15 @@ static inline __attribute__((always_inline)) void gather_T(const sm_implicit_sys
     STENCIL_END
 }
 
+/* Whether particle block pb reaches a grid block this rank owns: across ranks, a ghost block
+ * that only reaches other ranks' blocks adds nothing the solve reads, and is skipped. */
+static inline int pblock_needed(const sm_implicit_sys *s, const sm_pblock *pb) {
+    if (!s->ranks) return 1;
+    for (int c = 0; c < (1 << D); c++)
+        if (pb->gslot[c] != SM_NO_SLOT && s->ranks->owned[pb->gslot[c]]) return 1;
+    return 0;
+}
+
 void SM_FN(sm_imp_scatter_by_colour)(const sm_implicit_sys *s, sm_imp_particle_scatter fn, const void *arg,
                                      sm_real *out) {
     const sm_bins *bins = s->bins;
@@ -83,6 +92,7 @@ void SM_FN(sm_imp_scatter_by_colour)(const sm_implicit_sys *s, sm_imp_particle_s
                           th, &lo, &hi);
             for (long t = lo; t < hi; t++) {
                 const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
+                if (!pblock_needed(s, pb)) continue;
                 int bc[3];
                 pblock_origin(pb, bc);
                 for (uint32_t idx = pb->start; idx < pb->end; idx++) fn(s, arg, bins->perm[idx], pb, bc, out);
@@ -129,8 +139,10 @@ static void for_particles(const sm_implicit_sys *s, particle_fn fn, const void *
         long lo, hi;
         sm_thread_team(&th, &nt);
         sm_bins_range(bins, NULL, 0, nb, nt, th, &lo, &hi);
-        for (long b = lo; b < hi; b++)
+        for (long b = lo; b < hi; b++) {
+            if (!pblock_needed(s, &bins->pb[b])) continue;
             for (uint32_t i = bins->pb[b].start; i < bins->pb[b].end; i++) fn(s, arg, bins->perm[i], &bins->pb[b]);
+        }
     }
 }
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Distributed scaling on this machine (issue 19, docs/scaling.md): strong scaling (a fixed 3D
 # block on 1 and 2 ranks, 4 oversubscribed: functional only), weak scaling (a fixed block per
-# rank), the halo traffic per step and the time per stage, from bench/mpi_scaling; then the model
+# rank), the implicit integrator's strong scaling (a 125k-particle block, 3 steps of 1 ms), the
+# halo traffic per step and the time per stage, from bench/mpi_scaling; then the model
 # for 1e9 particles (scripts/scaling_model.py) from those rows.
 #   scripts/scaling.sh [BUILD]     (default build-rel: a Release build with SM_MPI)
 # Writes out/scaling/scaling.csv and out/scaling/model.md.
@@ -31,4 +32,7 @@ run 1 1 3 weak 500000 30
 run 2 1 3 weak 500000 30
 run 1 1 2 strong 1000000 30
 run 2 1 2 strong 1000000 30
+for np_th in "1 1" "1 2" "2 1" "4 1"; do # the implicit integrator (4 ranks oversubscribed: functional only)
+    run $np_th 3 implicit 125000 3
+done
 /usr/bin/python3 scripts/scaling_model.py "$csv" | tee out/scaling/model.md

@@ -3,8 +3,9 @@
  *    particles in id order), computed here by rank 0 with 2 threads while the ranks run 1 thread
  *    each: 2D and 3D collapses of a sand block hit by a moving sphere, with a ball thrown across
  *    the domain and an emitter pouring sand on top, at the adaptive dt (a max over the ranks);
- *  - mass is conserved across migration: the ranks' particles add up to the seeded plus the
- *    emitted ones every frame, and their masses to the seeded plus the emitted mass;
+ *  - mass and momentum are conserved across migration: the ranks' particles add up to the seeded
+ *    plus the emitted ones every frame, their masses to the seeded plus the emitted mass, and
+ *    their momentum to the one-rank run's (within 1e-12 of the mass times 1 m/s: sum order);
  *  - the thrown ball's first particle crosses rank boundaries (its owner changes at least once on
  *    2 and 3 ranks, at least twice on 4); every rank holds particles at the start (the cuts balance them);
  *  - the state does change (the hash after the run differs from the start's);
@@ -124,15 +125,22 @@ static uint64_t resume(sm_test_membuf *ck, int M) {
     return all;
 }
 
-/* This rank's particle count and mass, summed over the ranks. */
-static void totals(const sm_world *w, double *count, double *mass) {
+/* This rank's particle count, mass and momentum (p[3], kg m/s), summed over the ranks (a world
+ * not distributed: all = mine, pass comm_sum 0). */
+static void totals(const sm_world *w, int comm_sum, double *count, double *mass, double p[3]) {
     sm_particles_view pv;
     sm_world_particles(w, &pv);
-    double mine[2] = {(double)pv.n, 0}, all[2];
-    for (size_t i = 0; i < pv.n; i++) mine[1] += sm_world_particle_mass(w, i);
-    MPI_Allreduce(mine, all, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    double mine[5] = {(double)pv.n, 0, 0, 0, 0}, all[5];
+    for (size_t i = 0; i < pv.n; i++) {
+        const double m = sm_world_particle_mass(w, i);
+        mine[1] += m;
+        for (int a = 0; a < pv.dim; a++) mine[2 + a] += m * (double)pv.v[i * (size_t)pv.dim + (size_t)a];
+    }
+    if (comm_sum) MPI_Allreduce(mine, all, 5, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    else memcpy(all, mine, sizeof all);
     *count = all[0];
     *mass = all[1];
+    for (int a = 0; a < 3; a++) p[a] = all[2 + a];
 }
 
 /* The rank holding particle `id`, or -1. */
@@ -150,21 +158,28 @@ static void run(int dim) {
     size_t ball_id = 0;
     /* One rank, two threads: the reference. */
     uint64_t ref[1] = {0};
+    double ref_p[FRAMES + 1][3]; /* the one-rank run's momentum after each frame */
+    memset(ref_p, 0, sizeof ref_p);
     if (rank == 0) {
         sm_world *w = build(dim, 2, &ball_id, 0);
         CHECK(w != NULL);
-        for (int f = 1; f <= FRAMES && w; f++) CHECK(sm_world_advance(w, f * FRAME_DT) == SM_OK);
+        for (int f = 1; f <= FRAMES && w; f++) {
+            CHECK(sm_world_advance(w, f * FRAME_DT) == SM_OK);
+            double n, m;
+            totals(w, 0, &n, &m, ref_p[f]);
+        }
         ref[0] = sm_world_id_hash(w);
         sm_world_destroy(w);
     }
     MPI_Bcast(ref, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+    MPI_Bcast(ref_p, 3 * (FRAMES + 1), MPI_DOUBLE, 0, MPI_COMM_WORLD);
 
     sm_world *w = build(dim, 1, &ball_id, 0);
     CHECK(w != NULL);
     if (!w) return;
     const uint64_t h_start = sm_world_id_hash(w);
-    double n0, m0;
-    totals(w, &n0, &m0); /* every rank holds every particle before sm_world_distribute */
+    double n0, m0, p0[3];
+    totals(w, 1, &n0, &m0, p0); /* every rank holds every particle before sm_world_distribute */
     n0 /= ranks;
     m0 /= ranks;
     CHECK(sm_world_distribute(w, MPI_COMM_WORLD) == SM_OK);
@@ -186,11 +201,14 @@ static void run(int dim) {
             fprintf(stderr, "rank %d: %s\n", rank, sm_world_errmsg(w));
             break;
         }
-        double n, m;
-        totals(w, &n, &m);
+        double n, m, p[3];
+        totals(w, 1, &n, &m, p);
         const double emitted = sm_world_emitted_mass(w, 0);
         CHECK(n > n0);
         CHECK_NEAR(m, m0 + emitted, (sm_real_is_double() ? 1e-12 : 1e-6) * (m0 + emitted)); /* particle masses in sm_real */
+        /* Momentum across migration: the one-rank run's, to the rounding of the sums' order (the
+         * state itself is bitwise the same: the hash below); 1 m/s of the mass as the scale. */
+        for (int a = 0; a < dim; a++) CHECK_NEAR(p[a], ref_p[f][a], 1e-12 * m);
         const int now = holder(w, ball_id);
         CHECK(now >= 0);
         changes += now != owner;

@@ -8,7 +8,7 @@
 #  - a run on 3 ranks with checkpoints resumes on 2 ranks and ends with the one-process frames;
 #  - SIGTERM to mpirun during a long frame stops every rank at the next step with the last whole
 #    frame kept, and one process resumes it to the one-process frames;
-#  - the implicit castle on 2 and 3 ranks writes the one-process frames;
+#  - the implicit castle writes the one-process frames on 2 ranks, and on 3 ranks resumed on 2;
 #  - a command other than run is refused with exit code 2, nothing written.
 set -u
 BIN=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
@@ -113,14 +113,20 @@ else
     bad "SIGTERM on 2 ranks during frame 1: not stopped with frame 0 kept: $(tr '\r' '\n' <"$TMP/err" | tail -5)"
 fi
 
-# The implicit castle (Newton-GMRES across ranks): the one-process frames on 2 and 3 ranks.
-"$BIN" run "$SRC/scenes/castle.lua" --quality test --frames 1 --checkpoint-every 0 --out "$TMP/castle-1" -q 2>"$TMP/err" ||
+# The implicit castle (Newton-GMRES across ranks): the one-process frames on 2 ranks, and written
+# on 3 ranks with a checkpoint at frame 1, resumed on 2.
+castle() { # ranks out args...
+    local n=$1 out=$2; shift 2
+    ranks "$n" run "$SRC/scenes/castle.lua" --quality test --threads 1 --out "$out" -q "$@" 2>"$TMP/err" ||
+        bad "implicit castle on $n ranks ($*): $(head -c 400 "$TMP/err")"
+}
+"$BIN" run "$SRC/scenes/castle.lua" --quality test --frames 2 --checkpoint-every 0 --out "$TMP/castle-1" -q 2>"$TMP/err" ||
     bad "implicit castle on one process: $(head -c 400 "$TMP/err")"
-for n in 2 3; do
-    ranks "$n" run "$SRC/scenes/castle.lua" --quality test --frames 1 --threads 1 --checkpoint-every 0 --out "$TMP/castle-$n" -q 2>"$TMP/err" ||
-        bad "implicit castle on $n ranks: $(head -c 400 "$TMP/err")"
-    same_frames "$TMP/castle-1" "$TMP/castle-$n" "implicit castle on $n ranks"
-done
+castle 2 "$TMP/castle-2" --frames 2 --checkpoint-every 0
+same_frames "$TMP/castle-1" "$TMP/castle-2" "implicit castle on 2 ranks"
+castle 3 "$TMP/castle-3" --frames 1 --checkpoint-every 1
+castle 2 "$TMP/castle-3" --frames 2 --resume
+same_frames "$TMP/castle-1" "$TMP/castle-3" "implicit castle written on 3 ranks, resumed on 2"
 
 # Refusals: exit code 2 from every rank, a message, nothing written.
 ranks 2 info >"$TMP/out" 2>"$TMP/err"

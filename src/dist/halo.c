@@ -28,7 +28,7 @@ struct sm_dist_halo {
     unsigned char *owned;        /* per live block */
     uint32_t *need_slot, *give_slot; /* blocks this rank receives / sends, grouped by peer */
     uint64_t *need_key, *give_key;
-    size_t need_cap, give_cap, owned_cap;
+    size_t need_slot_cap, need_key_cap, give_slot_cap, give_key_cap, owned_cap;
     size_t *need_at, *give_at;   /* per peer: first entry (size + 1 entries) */
     int *need_n, *give_n;        /* per peer: entries */
     sm_real *sendbuf, *recvbuf;
@@ -99,9 +99,8 @@ static int list_needs(sm_dist *d, const sm_grid *g) {
     }
     for (int r = 0; r < d->size; r++) h->need_at[r + 1] = h->need_at[r] + (size_t)h->need_n[r];
     const size_t total = h->need_at[d->size];
-    size_t cap = h->need_cap;
-    if (!grow((void **)&h->need_slot, &cap, total, sizeof *h->need_slot) ||
-        !grow((void **)&h->need_key, &h->need_cap, total, sizeof *h->need_key))
+    if (!grow((void **)&h->need_slot, &h->need_slot_cap, total, sizeof *h->need_slot) ||
+        !grow((void **)&h->need_key, &h->need_key_cap, total, sizeof *h->need_key))
         return 0;
     memset(h->need_n, 0, (size_t)d->size * sizeof *h->need_n);
     for (size_t t = 0; t < nb; t++) {
@@ -130,9 +129,8 @@ static int exchange_keys(sm_dist *d, const sm_grid *g) {
     MPI_Alltoall(h->need_n, 1, MPI_INT, h->give_n, 1, MPI_INT, d->comm);
     for (int r = 0; r < d->size; r++) h->give_at[r + 1] = h->give_at[r] + (size_t)h->give_n[r];
     const size_t total = h->give_at[d->size];
-    size_t cap = h->give_cap;
-    int ok = grow((void **)&h->give_slot, &cap, total, sizeof *h->give_slot) &&
-             grow((void **)&h->give_key, &h->give_cap, total, sizeof *h->give_key) && reserve_requests(d, sizeof(uint64_t));
+    int ok = grow((void **)&h->give_slot, &h->give_slot_cap, total, sizeof *h->give_slot) &&
+             grow((void **)&h->give_key, &h->give_key_cap, total, sizeof *h->give_key) && reserve_requests(d, sizeof(uint64_t));
     if (!all_ok(d, ok)) return 0;
     size_t n = 0;
     for (int r = 0; r < d->size; r++)

@@ -25,12 +25,14 @@
 #define FRAME_DT (1.0 / 120)
 
 static int rank, ranks;
+static sm_kernel kernel = SM_KERNEL_QUADRATIC; /* the explicit runs': the ghosts a particle needs depend on its support */
 
 static sm_world *build(int dim, int threads, size_t *ball_id, int implicit) {
     sm_world_def def = sm_world_def_default();
     def.dim = dim;
     def.dx = dim == 2 ? (implicit ? 0.02 : 0.01) : 0.04;
     def.threads = threads;
+    def.kernel = implicit ? SM_KERNEL_QUADRATIC : kernel;
     if (implicit) {
         def.integrator = SM_INTEGRATOR_IMPLICIT;
         def.gmres_preconditioner = dim == 3; /* both solver paths */
@@ -220,10 +222,11 @@ static void run(int dim) {
     CHECK(ds.ranks == ranks && ds.rank == rank);
     if (piece && ranks >= 2) CHECK(ds.bytes_sent > 3 * piece); /* rank 0 sent a message of several pieces */
     if (rank == 0)
-        printf("%dD on %d ranks: id hash %016llx (one rank, 2 threads: %016llx), the ball's owner changed %d times, "
+        printf("%dD (%s kernel) on %d ranks: id hash %016llx (one rank, 2 threads: %016llx), the ball's owner changed %d times, "
                "rank 0: %zu particles, %zu ghosts and %zu migrating sent in the last step (%zu bytes, %zu messages), "
                "%llu cuts\n",
-               dim, ranks, (unsigned long long)h, (unsigned long long)ref[0], changes, ds.particles, ds.ghosts_sent,
+               dim, kernel == SM_KERNEL_CUBIC ? "cubic" : "quadratic", ranks, (unsigned long long)h,
+               (unsigned long long)ref[0], changes, ds.particles, ds.ghosts_sent,
                ds.migrated_sent, ds.bytes_sent, ds.messages_sent, (unsigned long long)ds.rebalances);
     CHECK(h == ref[0]);
     CHECK(h != h_start);
@@ -294,6 +297,9 @@ int main(int argc, char **argv) {
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);
     run(2);
     run(3);
+    kernel = SM_KERNEL_CUBIC; /* a stencil of 4: more of a block's particles reach the next block */
+    run(2);
+    kernel = SM_KERNEL_QUADRATIC;
     run_implicit(2, 3);
     run_implicit(3, 2);
     int mine = sm_test_failures, all = 0;

@@ -3,15 +3,17 @@
  * owned elsewhere, exact sums added over the ranks.
  *
  * Ownership: grid block g belongs to the owner of Morton code g (dist.c's cuts, the same ranges
- * as particle blocks). Its P2G contributions come from particle blocks g - {0,1}^d, each a
- * neighbour of g, so every such particle is on g's owner (owned, or a ghost: exchange.c sends a
- * copy to the owner of every block around a particle's block). Hence g is live on its owner and
- * every sum over its particles there is complete: the owner's values of g are a one-rank run's.
+ * as particle blocks). Every particle that reaches g is on g's owner (owned, or a ghost:
+ * exchange.c sends a copy to every rank holding a block the particle reaches complete), so every
+ * sum over g's particles there is complete: the owner's values of g are a one-rank run's.
+ * A rank may hold a block g that no particle reaches (the binner makes the 2^d grid blocks of
+ * every particle block live) and that is not live on its owner: no gather reads it, and a
+ * refresh writes zeros there.
  *
  * The plan, built each step after the binning (collective):
  *   1. for every live block owned elsewhere, its owner; the keys, grouped by owner, go to the
  *      owners (MPI_Alltoall of the counts, then one message per peer);
- *   2. each owner finds the asked keys' slots in its grid (every one is live there: above);
+ *   2. each owner finds the asked keys' slots in its grid (SM_NO_SLOT: not live there, above);
  *   3. a refresh sends each peer the values of the blocks it asked for and writes what arrives
  *      into the blocks owned elsewhere (one message per peer and direction). */
 #include <stdlib.h>
@@ -122,8 +124,8 @@ static int reserve_requests(sm_dist *d, size_t elem) {
     return sm_dist_reserve_requests(d, n);
 }
 
-/* 1-2. The keys to their owners; the asked keys' slots here. Returns 0 out of memory, -1 when an
- * asked block is not live here (a broken decomposition: never expected). */
+/* 1-2. The keys to their owners; the asked keys' slots here (SM_NO_SLOT where not live). Returns
+ * 0 out of memory. */
 static int exchange_keys(sm_dist *d, const sm_grid *g) {
     sm_dist_halo *h = d->halo;
     MPI_Alltoall(h->need_n, 1, MPI_INT, h->give_n, 1, MPI_INT, d->comm);
@@ -139,20 +141,18 @@ static int exchange_keys(sm_dist *d, const sm_grid *g) {
         n += sm_dist_isend(d, (const unsigned char *)(h->need_key + h->need_at[r]), (size_t)h->need_n[r] * sizeof(uint64_t), r,
                            22, n);
     sm_dist_wait(d, n);
-    int missing = 0;
-    for (size_t k = 0; k < total; k++) {
-        const uint32_t slot = sm_block_hash_find(&g->hash, h->give_key[k]);
-        missing |= slot == SM_NO_SLOT;
-        h->give_slot[k] = slot == SM_NO_SLOT ? 0 : slot;
-    }
-    return all_ok(d, !missing) ? 1 : -1;
+    for (size_t k = 0; k < total; k++) h->give_slot[k] = sm_block_hash_find(&g->hash, h->give_key[k]);
+    return 1;
 }
 
 static void halo_refresh(void *ctx, sm_real *v) {
     sm_dist *d = ctx;
     sm_dist_halo *h = d->halo;
     const size_t bw = h->block_values, bytes = bw * sizeof(sm_real);
-    for (size_t k = 0; k < h->give_at[d->size]; k++) memcpy(h->sendbuf + k * bw, v + h->give_slot[k] * bw, bytes);
+    for (size_t k = 0; k < h->give_at[d->size]; k++) {
+        if (h->give_slot[k] == SM_NO_SLOT) memset(h->sendbuf + k * bw, 0, bytes); /* not live here: reached by none */
+        else memcpy(h->sendbuf + k * bw, v + (size_t)h->give_slot[k] * bw, bytes);
+    }
     size_t n = 0;
     for (int r = 0; r < d->size; r++)
         n += sm_dist_irecv(d, (unsigned char *)(h->recvbuf + h->need_at[r] * bw), (size_t)h->need_n[r] * bytes, r, 23, n);
@@ -194,9 +194,6 @@ sm_status sm_dist_halo_plan(sm_world *w, const sm_imp_ranks **out) {
                                              (unsigned long long)w->steps + 1);
     sm_dist_halo *h = d->halo;
     const int keys = exchange_keys(d, g);
-    if (keys < 0)
-        return sm_world_fail(w, SM_ERR_INVALID, "step %llu: a rank asked for a grid block its owner does not have",
-                             (unsigned long long)w->steps + 1);
     h->block_values = (size_t)g->block_nodes * (size_t)d->dim;
     ok = keys > 0 && grow((void **)&h->sendbuf, &h->send_cap, h->give_at[d->size] * h->block_values, sizeof(sm_real)) &&
          grow((void **)&h->recvbuf, &h->recv_cap, h->need_at[d->size] * h->block_values, sizeof(sm_real)) &&

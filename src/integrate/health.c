@@ -15,7 +15,8 @@ static long first_bad_particle(const sm_world *w, double dt, int *fast) {
     const sm_particles *P = &w->p;
     const double lim2 = dt > 0 ? (w->def.dx / dt) * (w->def.dx / dt) * (1 + SM_CFL_SLACK) : INFINITY;
     *fast = 0;
-    for (size_t p = 0; p < P->n; p++) {
+    const size_t n = w->dist ? sm_dist_owned(w) : P->n; /* a ghost's F^E is its owner's to check */
+    for (size_t p = 0; p < n; p++) {
         int ok = 1;
         double s2 = 0;
         for (int a = 0; a < d; a++) {

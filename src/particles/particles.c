@@ -10,7 +10,7 @@ sm_particle_field sm_particle_field_info(int dim, int k) {
     const int d = dim;
     static const sm_particle_field none = {0};
     switch (k) {
-#define SM_X_(name, type, count, rest, hashed, doc)                                                 \
+#define SM_X_(name, type, count, rest, hashed, p2g, doc)                                                 \
     case SM_PFIELD_##name: {                                                                       \
         const sm_particle_field f = {#name, #type, doc, sizeof(type), (count), (hashed)};          \
         return f;                                                                                  \
@@ -24,7 +24,7 @@ sm_particle_field sm_particle_field_info(int dim, int k) {
 
 void *sm_particles_field_data(const sm_particles *p, int k) {
     switch (k) {
-#define SM_X_(name, type, count, rest, hashed, doc) \
+#define SM_X_(name, type, count, rest, hashed, p2g, doc) \
     case SM_PFIELD_##name: return p->name;
         SM_PARTICLE_FIELDS(SM_X_, 0)
 #undef SM_X_
@@ -56,7 +56,7 @@ sm_status sm_particles_reserve(sm_particles *p, int dim, size_t n) {
     if (cap < 1024) cap = 1024;
     const int d = dim;
     (void)d;
-#define SM_X_(name, type, count, rest, hashed, doc) \
+#define SM_X_(name, type, count, rest, hashed, p2g, doc) \
     if (!grow((void **)&p->name, sizeof(type) * (size_t)(count) * cap)) return SM_ERR_NOMEM;
     SM_PARTICLE_FIELDS(SM_X_, d)
 #undef SM_X_
@@ -65,7 +65,7 @@ sm_status sm_particles_reserve(sm_particles *p, int dim, size_t n) {
 }
 
 void sm_particles_free(sm_particles *p) {
-#define SM_X_(name, type, count, rest, hashed, doc) free(p->name);
+#define SM_X_(name, type, count, rest, hashed, p2g, doc) free(p->name);
     SM_PARTICLE_FIELDS(SM_X_, 0)
 #undef SM_X_
     memset(p, 0, sizeof *p);
@@ -80,7 +80,7 @@ static inline int rest_value(int rest, int d, int count, int k) {
 void sm_particles_init_rest(sm_particles *p, int dim, size_t first, size_t count_) {
     const int d = dim;
     for (size_t i = first; i < first + count_; i++) {
-#define SM_X_(name, type, count, rest, hashed, doc) \
+#define SM_X_(name, type, count, rest, hashed, p2g, doc) \
     for (int k = 0; k < (count); k++) p->name[i * (size_t)(count) + (size_t)k] = (type)rest_value(rest, d, count, k);
         SM_PARTICLE_FIELDS(SM_X_, d)
 #undef SM_X_
@@ -88,7 +88,7 @@ void sm_particles_init_rest(sm_particles *p, int dim, size_t first, size_t count
 }
 
 static inline __attribute__((always_inline)) void pack_d(const sm_particles *p, int d, size_t i, unsigned char *b) {
-#define SM_X_(name, type, count, rest, hashed, doc)                              \
+#define SM_X_(name, type, count, rest, hashed, p2g, doc)                              \
     memcpy(b, p->name + i * (size_t)(count), sizeof(type) * (size_t)(count)); \
     b += sizeof(type) * (size_t)(count);
     SM_PARTICLE_FIELDS(SM_X_, d)
@@ -96,7 +96,7 @@ static inline __attribute__((always_inline)) void pack_d(const sm_particles *p, 
 }
 
 static inline __attribute__((always_inline)) void unpack_d(sm_particles *p, int d, size_t i, const unsigned char *b) {
-#define SM_X_(name, type, count, rest, hashed, doc)                              \
+#define SM_X_(name, type, count, rest, hashed, p2g, doc)                              \
     memcpy(p->name + i * (size_t)(count), b, sizeof(type) * (size_t)(count)); \
     b += sizeof(type) * (size_t)(count);
     SM_PARTICLE_FIELDS(SM_X_, d)
@@ -105,7 +105,7 @@ static inline __attribute__((always_inline)) void unpack_d(sm_particles *p, int 
 
 /* Particle src to position dst, every field. */
 static inline __attribute__((always_inline)) void move_d(sm_particles *p, int d, size_t dst, size_t src) {
-#define SM_X_(name, type, count, rest, hashed, doc) \
+#define SM_X_(name, type, count, rest, hashed, p2g, doc) \
     memcpy(p->name + dst * (size_t)(count), p->name + src * (size_t)(count), sizeof(type) * (size_t)(count));
     SM_PARTICLE_FIELDS(SM_X_, d)
 #undef SM_X_
@@ -114,6 +114,46 @@ static inline __attribute__((always_inline)) void move_d(sm_particles *p, int d,
 void sm_particles_move(sm_particles *p, int dim, size_t dst, size_t src) {
     if (dim == 2) move_d(p, 2, dst, src);
     else move_d(p, 3, dst, src);
+}
+
+static inline __attribute__((always_inline)) void pack_p2g_d(const sm_particles *p, int d, size_t i, unsigned char *b) {
+#define SM_X_(name, type, count, rest, hashed, p2g, doc)                               \
+    if (p2g) {                                                                      \
+        memcpy(b, p->name + i * (size_t)(count), sizeof(type) * (size_t)(count)); \
+        b += sizeof(type) * (size_t)(count);                                       \
+    }
+    SM_PARTICLE_FIELDS(SM_X_, d)
+#undef SM_X_
+}
+
+static inline __attribute__((always_inline)) void unpack_p2g_d(sm_particles *p, int d, size_t i, const unsigned char *b) {
+#define SM_X_(name, type, count, rest, hashed, p2g, doc)                               \
+    if (p2g) {                                                                      \
+        memcpy(p->name + i * (size_t)(count), b, sizeof(type) * (size_t)(count)); \
+        b += sizeof(type) * (size_t)(count);                                       \
+    }
+    SM_PARTICLE_FIELDS(SM_X_, d)
+#undef SM_X_
+}
+
+size_t sm_particles_p2g_size(int dim) {
+    size_t b = 0;
+    const int d = dim;
+    (void)d;
+#define SM_X_(name, type, count, rest, hashed, p2g, doc) b += (p2g) ? sizeof(type) * (size_t)(count) : 0;
+    SM_PARTICLE_FIELDS(SM_X_, d)
+#undef SM_X_
+    return b;
+}
+
+void sm_particles_pack_p2g(const sm_particles *p, int dim, size_t i, void *buf) {
+    if (dim == 2) pack_p2g_d(p, 2, i, buf);
+    else pack_p2g_d(p, 3, i, buf);
+}
+
+void sm_particles_unpack_p2g(sm_particles *p, int dim, size_t i, const void *buf) {
+    if (dim == 2) unpack_p2g_d(p, 2, i, buf);
+    else unpack_p2g_d(p, 3, i, buf);
 }
 
 void sm_particles_pack(const sm_particles *p, int dim, size_t i, void *buf) {

@@ -30,32 +30,35 @@
 #define SM_REST_ZERO 0
 #define SM_REST_IDENTITY 1 /* a d x d identity matrix (F^E of an undeformed particle) */
 
-/* The field list: X(name, C type, values per particle for dimension d, rest value, hashed, doc).
- * hashed = 1: part of sm_world_state_hash, the evolving state (tau is a function of F^E; vol0
- * and the material never change). Order = storage order of packed particles and of the hash. */
+/* The field list: X(name, C type, values per particle for dimension d, rest value, hashed, p2g,
+ * doc). hashed = 1: part of sm_world_state_hash, the evolving state (tau is a function of F^E;
+ * vol0 and the material never change). p2g = 1: read by P2G, so a ghost of an explicit step
+ * (dist/exchange.c) carries it; the others (F^E and the plastic state, read by G2P and the
+ * plasticity of owned particles only) stay with the owner. Order = storage order of packed
+ * particles and of the hash. */
 #define SM_PARTICLE_FIELDS(X, d)                                                                     \
-    X(x, double, (d), SM_REST_ZERO, 1, "m: position (double in both builds: see below)")            \
-    X(v, sm_real, (d), SM_REST_ZERO, 1, "m/s: velocity")                                             \
-    X(B, sm_real, (d) * (d), SM_REST_ZERO, 1, "m^2/s: APIC affine matrix B_p (3.84), row-major")     \
-    X(F, sm_real, (d) * (d), SM_REST_IDENTITY, 1, "1: elastic deformation gradient F^E, row-major")  \
-    X(tau, sm_real, SM_NTAU(d), SM_REST_ZERO, 0,                                                     \
+    X(x, double, (d), SM_REST_ZERO, 1, 1, "m: position (double in both builds: see below)")         \
+    X(v, sm_real, (d), SM_REST_ZERO, 1, 1, "m/s: velocity")                                          \
+    X(B, sm_real, (d) * (d), SM_REST_ZERO, 1, 1, "m^2/s: APIC affine matrix B_p (3.84), row-major")  \
+    X(F, sm_real, (d) * (d), SM_REST_IDENTITY, 1, 0, "1: elastic deformation gradient F^E, row-major") \
+    X(tau, sm_real, SM_NTAU(d), SM_REST_ZERO, 0, 1,                                                  \
       "Pa: Kirchhoff stress of F^E (P F^T = tau), symmetric, computed by the previous step's "       \
       "plasticity (or at insertion), so that P2G needs no second SVD")                               \
-    X(vol0, sm_real, 1, SM_REST_ZERO, 0, "m^3 (m^2 in 2D): initial volume V0")                       \
-    X(q, sm_real, 1, SM_REST_ZERO, 1, "1: hardening state (3.78)")                                   \
-    X(alpha, sm_real, 1, SM_REST_ZERO, 1, "1: Drucker-Prager alpha (3.80)")                          \
-    X(mat, uint16_t, 1, SM_REST_ZERO, 0, "material id")                                              \
-    X(id, uint32_t, 1, SM_REST_ZERO, 0, "stable particle id: 0, 1, 2, ... in order of insertion")
+    X(vol0, sm_real, 1, SM_REST_ZERO, 0, 1, "m^3 (m^2 in 2D): initial volume V0")                    \
+    X(q, sm_real, 1, SM_REST_ZERO, 1, 0, "1: hardening state (3.78)")                                \
+    X(alpha, sm_real, 1, SM_REST_ZERO, 1, 0, "1: Drucker-Prager alpha (3.80)")                       \
+    X(mat, uint16_t, 1, SM_REST_ZERO, 0, 1, "material id")                                           \
+    X(id, uint32_t, 1, SM_REST_ZERO, 0, 1, "stable particle id: 0, 1, 2, ... in order of insertion")
 
 typedef struct sm_particles {
     size_t n, cap; /* particles stored, particles allocated */
-#define SM_X_(name, type, count, rest, hashed, doc) type *name;
+#define SM_X_(name, type, count, rest, hashed, p2g, doc) type *name;
     SM_PARTICLE_FIELDS(SM_X_, 0)
 #undef SM_X_
 } sm_particles;
 
 enum {
-#define SM_X_(name, type, count, rest, hashed, doc) SM_PFIELD_##name,
+#define SM_X_(name, type, count, rest, hashed, p2g, doc) SM_PFIELD_##name,
     SM_PARTICLE_FIELDS(SM_X_, 0)
 #undef SM_X_
     SM_PARTICLE_NFIELDS
@@ -90,6 +93,11 @@ void sm_particles_init_rest(sm_particles *p, int dim, size_t first, size_t count
  * order, native representation), and back into particle i (i < cap; n is not changed). */
 void sm_particles_pack(const sm_particles *p, int dim, size_t i, void *buf);
 void sm_particles_unpack(sm_particles *p, int dim, size_t i, const void *buf);
+/* The same for the p2g fields only (sm_particles_p2g_size bytes): particle i's other fields are
+ * left as they were. */
+size_t sm_particles_p2g_size(int dim);
+void sm_particles_pack_p2g(const sm_particles *p, int dim, size_t i, void *buf);
+void sm_particles_unpack_p2g(sm_particles *p, int dim, size_t i, const void *buf);
 
 /* Moves particle perm[j] to position j for every j < n, in place (following the permutation's
  * cycles; the top bit of perm's entries is used as a mark), then sets perm to the identity. */

@@ -6,7 +6,8 @@
  * messages). Columns: dim, mode, ranks, threads per
  * rank, particles, steps, seconds (the slowest rank), particle-steps/s, per step: ghosts sent,
  * particles migrating, bytes and messages (summed over the ranks), the largest rank's particles
- * over the mean, re-cuts; then seconds per stage (the slowest rank's), sm_stage_name order. */
+ * over the mean, re-cuts; then seconds per stage (the slowest rank's), sm_stage_name order; then the
+ * slowest rank's seconds blocked on the exchange's messages (sm_dist_stats.exchange_wait_s). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -72,7 +73,7 @@ int main(int argc, char **argv) {
     for (int s = 0; s < (implicit ? 1 : 5); s++) sm_world_step(w, dt); /* warm-up: caches, first re-cut */
     sm_diagnostics d0, d1;
     sm_world_diagnostics(w, &d0);
-    double sums[4] = {0, 0, 0, 0}, imbalance = 0;
+    double sums[4] = {0, 0, 0, 0}, imbalance = 0, wait = 0;
     MPI_Barrier(MPI_COMM_WORLD);
     const double t0 = MPI_Wtime();
     for (int s = 0; s < steps; s++) {
@@ -84,6 +85,7 @@ int main(int argc, char **argv) {
         sums[2] += (double)(ds.bytes_sent + ds.halo_bytes_sent);
         sums[3] += (double)(ds.messages_sent + ds.halo_messages_sent);
         imbalance += ds.mean_particles > 0 ? (double)ds.max_particles / ds.mean_particles : 1;
+        wait += ds.exchange_wait_s;
     }
     const double mine = MPI_Wtime() - t0;
     sm_world_diagnostics(w, &d1);
@@ -92,6 +94,8 @@ int main(int argc, char **argv) {
     MPI_Reduce(sums, all, 4, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
     for (int s = 0; s < SM_STAGE_COUNT; s++) stage[s] = d1.stage_seconds[s] - d0.stage_seconds[s];
     MPI_Reduce(stage, stage_max, SM_STAGE_COUNT, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
+    double wait_max = 0;
+    MPI_Reduce(&wait, &wait_max, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
     sm_dist_stats ds;
     sm_world_dist_stats(w, &ds);
     double total = (double)ds.particles, total_all = 0;
@@ -101,7 +105,7 @@ int main(int argc, char **argv) {
                total_all, steps, secs, total_all * steps / secs, all[0] / steps, all[1] / steps, all[2] / steps,
                all[3] / steps, imbalance / steps, (unsigned long long)ds.rebalances);
         for (int s = 0; s < SM_STAGE_COUNT; s++) printf(",%.4f", stage_max[s]);
-        printf("\n");
+        printf(",%.4f\n", wait_max);
     }
     sm_world_destroy(w);
     MPI_Finalize();

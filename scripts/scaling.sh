@@ -16,7 +16,7 @@ csv=out/scaling/scaling.csv
 {
     printf 'dim,mode,ranks,threads,particles,steps,seconds,particle_steps_per_s,ghosts_per_step,migrating_per_step,bytes_per_step,messages_per_step,imbalance,recuts'
     "$B/bench/mpi_scaling" --stage-names 2>/dev/null || true
-    echo
+    echo ',exchange_wait_s' # the slowest rank's time blocked on the exchange's messages
 } > "$csv"
 run() { # ranks threads args...
     local np=$1 th=$2; shift 2

@@ -45,6 +45,8 @@ typedef struct sm_dist_stats {
     size_t ghosts_sent, migrated_sent;
     size_t bytes_sent, messages_sent;
     size_t halo_bytes_sent, halo_messages_sent, halo_refreshes; /* implicit: grid node vectors to other ranks */
+    double exchange_wait_s; /* the last exchange's time blocked on its messages (s): at most what overlapping
+                               the exchange with interior work could hide */
 } sm_dist_stats;
 
 /** Fills *out (collective only at sm_world_distribute; here local). 0 if w is not distributed. */

@@ -161,7 +161,9 @@ static int send_receive(sm_dist *d, size_t ps, size_t gs) {
         d->stats.messages_sent++;
         d->stats.ghosts_sent += (size_t)sent[2 * r + 1];
     }
+    const double t0 = MPI_Wtime();
     sm_dist_wait(d, nreq);
+    d->stats.exchange_wait_s = MPI_Wtime() - t0;
     return 1;
 }
 

@@ -25,6 +25,13 @@ typedef struct sm_pblock {
     uint32_t gslot[8];
 } sm_pblock;
 
+/* What a full binning was computed from: the next step may keep it only if these are unchanged. */
+typedef struct sm_bins_basis {
+    int valid, stencil;
+    size_t n, nactive;
+    double pos_lo[3], pos_inv_dx;
+} sm_bins_basis;
+
 /* The binning of one step, grown as needed, never shrunk. */
 typedef struct sm_bins {
     uint32_t *perm;         /* particle indices grouped by particle block, ascending id within a block (capacity: the
@@ -41,6 +48,8 @@ typedef struct sm_bins {
     size_t color_cap;
     uint32_t color_count[8], color_offset[9];
     uint64_t reorders;      /* times the particle storage was reordered by block */
+    uint64_t reuses;        /* binnings that kept the last one (every particle still in its block) */
+    sm_bins_basis basis;    /* what the last full binning was made of (valid 0: none yet) */
     int keep_storage;       /* never reorder the storage (a distributed world's storage holds its
                                particles, then ghosts: dist/exchange.c reorders its particles) */
 } sm_bins;

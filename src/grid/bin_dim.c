@@ -16,7 +16,10 @@
  *      ascending key order, zeroed for P2G; each particle block's slots;
  *   5. colour_lists: particle blocks grouped by colour for the race-free scatter;
  *   6. reorder_if_scattered: move the particle storage into block order when a block's
- *      particles are no longer mostly contiguous (every later pass then streams). */
+ *      particles are no longer mostly contiguous (every later pass then streams).
+ * Before all of these, bins_still_hold: when no particle has left its block since the last
+ * binning (a pile at rest, a slow scene), steps 1-6 would give it again, and only the grid is
+ * zeroed. */
 #include "core/dim.h"
 
 #include <string.h>
@@ -285,10 +288,73 @@ static void reorder_if_scattered(sm_bins *b, sm_particles *P) {
     }
 }
 
+static sm_bins_basis basis_of(const sm_particles *P, const sm_grid *g, const sm_step_ctx *c) {
+    sm_bins_basis s;
+    s.valid = 1;
+    s.stencil = c->stencil;
+    s.n = P->n;
+    s.nactive = g->nactive;
+    for (int a = 0; a < 3; a++) s.pos_lo[a] = c->pos_lo[a];
+    s.pos_inv_dx = c->pos_inv_dx;
+    return s;
+}
+
+static int same_basis(const sm_bins_basis *a, const sm_bins_basis *o) {
+    int same = a->stencil == o->stencil && a->n == o->n && a->nactive == o->nactive && a->pos_inv_dx == o->pos_inv_dx;
+    for (int k = 0; k < 3; k++) same &= a->pos_lo[k] == o->pos_lo[k];
+    return same;
+}
+
+/* 1 if particle blocks r0..r1-1 still hold: each stretch of perm has its block's particles,
+ * in strictly ascending id (and then its `ascending` flag as order_by_id would set it). Stops at
+ * the first that does not. */
+static int blocks_hold(sm_bins *b, const sm_particles *P, const sm_step_ctx *c, size_t r0, size_t r1) {
+    const uint32_t *perm = b->perm, *id = P->id;
+    for (size_t r = r0; r < r1; r++) {
+        const uint32_t s = b->pb[r].start, e = b->pb[r].end;
+        uint32_t increasing = 1;
+        for (uint32_t j = s; j < e; j++) {
+            const uint32_t p = perm[j];
+            if (particle_key(c, P->x + (size_t)p * D, c->stencil) != b->pb[r].key) return 0;
+            if (j > s && id[p] <= id[perm[j - 1]]) return 0;
+            increasing &= j == s || p > perm[j - 1];
+        }
+        b->pb[r].ascending = increasing;
+    }
+    return 1;
+}
+
+/* 0. The last binning holds again when it was made for the same particle count, kernel, domain and
+ * grid, and every one of its blocks holds (blocks_hold): perm is a permutation of the n
+ * particles, so each particle is in its own block's stretch, sorted by id, and the non-empty
+ * blocks are the same. A full binning is a function of each block's set of particles (the
+ * counting sort is then put in id order; grid blocks, slots and colours follow from the block
+ * keys; the storage reorder from perm, whose last decision stands), so it would give the same. */
+static int bins_still_hold(sm_bins *b, const sm_particles *P, const sm_grid *g, const sm_step_ctx *c, int T) {
+    const sm_bins_basis now = basis_of(P, g, c);
+    if (!b->basis.valid || !same_basis(&now, &b->basis)) return 0;
+    if (b->npb == 0 || b->pb[0].start != 0 || b->pb[b->npb - 1].end != P->n) return 0;
+    int held = 1;
+#pragma omp parallel for schedule(static, 1) reduction(& : held) num_threads(T)
+    for (int t = 0; t < T; t++) {
+        size_t r0, r1;
+        thread_share(b->npb, T, t, &r0, &r1);
+        held &= blocks_hold(b, P, c, r0, r1);
+    }
+    return held;
+}
+
 sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c) {
     const size_t n = P->n;
     const int T = c->threads > 0 ? c->threads : 1;
     long misses = 0;
+    if (bins_still_hold(b, P, g, c, T)) {
+        sm_grid_zero(g, T);
+        reorder_if_scattered(b, P);
+        b->reuses++;
+        return SM_OK;
+    }
+    b->basis.valid = 0;
     if (count_known_blocks(b, P->x, n, c, T, &misses) != SM_OK) return SM_ERR_NOMEM;
     if (misses > 0) {
         if (add_new_blocks(b, P->x, n, c) != SM_OK) return SM_ERR_NOMEM;
@@ -305,5 +371,6 @@ sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const
     sm_grid_zero(g, T);
     if (colour_lists(b) != SM_OK) return SM_ERR_NOMEM;
     reorder_if_scattered(b, P);
+    b->basis = basis_of(P, g, c);
     return SM_OK;
 }

@@ -10,8 +10,10 @@
  *   app/scene/pattern.c       string.find/match/gmatch/gsub with a matcher that counts its steps
  *   app/scene/params.c        the scene's globals: params, axis_angle, print
  *   app/scene/locate.c        the line of a key path in the source (for messages)
- *   app/scene/schema.c        the schema helpers: key paths, messages with file:line and did-you-mean,
- *                             typed fields with ranges, the one list parser, library messages
+ *   app/scene/schema.c        the schema's typed fields with ranges, a table's allowed keys, the one
+ *                             list parser
+ *   app/scene/messages.c      the schema's messages: key paths, file:line, did-you-mean, the allowed
+ *                             keys and values listed, library messages mapped onto scene keys
  *   app/scene/parse_scene.c   the top-level table: world definition, domain, lists, outputs, camera
  *   app/scene/parse_items.c   shapes, materials, objects, colliders, emitters
  *   app/scene/motion.c        quaternions, keyframes, motion functions (the library's sm_motion_fn)
@@ -141,7 +143,7 @@ struct sm_scene {
     char warn[SC_MAX_WARN][SC_WARN_LEN]; /* "PATH:LINE: key: what looks wrong" */
 };
 
-/* ---- small helpers (schema.c) ---- */
+/* ---- small helpers (schema.c: strings; messages.c: the rest) ---- */
 void sc_copy_str(char *dst, size_t n, const char *src);
 char *sc_dup_str(const char *s);
 const char *sc_fmt_num(char buf[32], double x);                 /* %g; NaN and infinities spelled out */
@@ -181,8 +183,8 @@ void sc_open_scene_globals(lua_State *L); /* params.c: params, axis_angle, print
 void sc_pop_error(lua_State *L, int status, char *buf, size_t n); /* a failed pcall's message, popped */
 int sc_has_position(const char *msg);             /* starts with Lua's "chunk:line:"? */
 
-/* ---- validation context and typed fields (schema.c); they run inside lua_pcall and raise a Lua
- * error carrying the finished message ("path:line: key.path: problem") ---- */
+/* ---- validation context, messages (messages.c) and typed fields (schema.c); they run inside
+ * lua_pcall and raise a Lua error carrying the finished message ("path:line: key.path: problem") ---- */
 typedef struct vctx {
     sm_scene *s;
     lua_State *L;
@@ -211,6 +213,19 @@ __attribute__((noreturn))
 #endif
 void sc_fail_library(vctx *v, const char *libmsg, const char *const *map);
 const char *sc_got(lua_State *L, int idx, char *buf, size_t n); /* "string \"abc\"", "number", ... */
+/* The key k of the table being checked is not in allowed: "unknown key" at k, with a suggestion
+ * or the keys what takes. */
+#if defined(__GNUC__)
+__attribute__((noreturn))
+#endif
+void sc_fail_unknown_key(vctx *v, const char *k, const char *const *allowed, int n, const char *what);
+/* The enum value on top is not one of names (or not a string): the names, with a suggestion. */
+#if defined(__GNUC__)
+__attribute__((noreturn))
+#endif
+void sc_fail_enum(vctx *v, const char *const *names, int n);
+
+/* typed fields (schema.c) */
 int sc_get(vctx *v, int t, const char *key);                    /* pushes t[key] (raw); its type */
 void sc_check_keys(vctx *v, int t, const char *const *allowed, int n, const char *what);
 int sc_list_len(vctx *v, int t, const char *example);

@@ -102,6 +102,12 @@ int sm_scene_mesh(const sm_scene *s, int i, sm_scene_mesh_info *out);
  * t = 0; message in err) or SM_ERR_NOMEM. Once only. */
 sm_status sm_scene_build(sm_scene *s, char *err, size_t errlen);
 
+/* Called by sm_scene_build on the new world before anything is added to it (e.g. to join a
+ * distributed seeding: sandmpm_mpi.h's sm_world_seed_share); a status other than SM_OK fails the
+ * build with the world's message. Set before sm_scene_build; NULL: none. */
+typedef sm_status (*sm_scene_world_hook)(void *user, sm_world *w);
+void sm_scene_on_world(sm_scene *s, sm_scene_world_hook hook, void *user);
+
 /* The world (NULL before a successful sm_scene_build). Owned by the scene. */
 sm_world *sm_scene_world(sm_scene *s);
 

@@ -84,6 +84,10 @@ sm_status cli_load_scene(const char *cmd, const cli_scene_opts *so, sm_scene **s
 sm_status cli_check_memory(const char *cmd, const sm_scene_settings *st);
 /* Builds the scene's world; message printed on failure. */
 sm_status cli_build_scene(const char *cmd, sm_scene *sc);
+/* so's scene loaded and built once more with hook on its world (sm_scene_on_world), its
+ * warnings not printed again (errors are); *sc NULL on failure. */
+sm_status cli_build_again(const char *cmd, const cli_scene_opts *so, sm_scene_world_hook hook, void *user,
+                          sm_scene **sc);
 /* Physical memory of this machine, bytes (0 if unknown). */
 double cli_machine_bytes(void);
 
@@ -171,6 +175,18 @@ sm_status cli_ranks_worst(sm_status st);
 int cli_ranks_share_ints(int *v, int n);
 int cli_ranks_share_bytes(unsigned char **data, size_t *len);
 
+/* A distributed seeding (sandmpm_mpi.h's sm_dist_seeding) of the run's world and rank 0's view. */
+typedef struct cli_seeding cli_seeding;
+/* sc built for the run: over several ranks and unless whole (a resume, whose checkpoint holds
+ * every particle), from a census build of the scene loaded again (errors printed, not warnings),
+ * then sc with only this rank's share of the particles (*seeding set, for cli_ranks_open);
+ * otherwise cli_build_scene(sc) (*seeding NULL). Collective over the ranks. */
+sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *sc, int whole, cli_seeding **seeding);
+/* Rank 0's view (see cli_ranks_open): the scene built again, without its particles when seeding
+ * is not NULL (each frame's gathered world replaces them). */
+sm_status cli_ranks_build_view(const char *cmd, const cli_scene_opts *so, cli_seeding *seeding, sm_scene **view);
+void cli_seeding_free(cli_seeding *s);
+
 typedef struct cli_ranks {
     int count, rank;
     sm_run_ranks hooks;           /* for sm_run_config.ranks when count > 1 */
@@ -180,10 +196,11 @@ typedef struct cli_ranks {
     unsigned char *stream;        /* the gathered checkpoint stream's buffer */
     size_t stream_cap;
 } cli_ranks;
-/* With several ranks: w distributed over them (sm_world_distribute; collective) and the hooks
- * set; view (rank 0; NULL elsewhere): a world built like w, which each frame is gathered into.
- * SM_OK, or the failure with its message. */
-sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, char *err, size_t errlen);
+/* With several ranks: w distributed over them (collective: sm_world_distribute_share when
+ * cli_ranks_build gave a seeding, else sm_world_distribute) and the hooks set; view (rank 0;
+ * NULL elsewhere): a world built like w, which each frame is gathered into. SM_OK, or the
+ * failure with its message. */
+sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, cli_seeding *seeding, char *err, size_t errlen);
 void cli_ranks_close(cli_ranks *r);
 
 #endif

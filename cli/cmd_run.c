@@ -365,7 +365,8 @@ static int run_command(int argc, char **argv) {
     int nframes = 0, stopped = 0;
     st = frame_count(&a, set, &nframes);
     if (st == SM_OK) st = cli_check_memory("run", set);
-    if (st == SM_OK) st = cli_build_scene("run", sc);
+    cli_seeding *seeding = NULL; /* over several ranks: each rank builds only its share of the particles */
+    if (st == SM_OK) st = cli_ranks_build("run", &a.so, sc, a.resume, &seeding);
     /* Only now, with a valid scene, touch the file system. */
     char outbuf[SM_PATH_MAX];
     const char *out = a.out;
@@ -386,11 +387,10 @@ static int run_command(int argc, char **argv) {
     if (st == SM_OK && a.resume) st = resume_ranks(&a, sm_scene_world(sc), out, hash, &first);
     cli_ranks ranks;
     sm_scene *view = NULL; /* rank 0 of several: the scene built again, for the gathered world */
-    if (st == SM_OK && cli_ranks_count() > 1 && cli_rank() == 0 && (st = cli_load_scene("run", &a.so, &view)) == SM_OK)
-        st = cli_build_scene("run", view);
+    if (st == SM_OK && cli_ranks_count() > 1 && cli_rank() == 0) st = cli_ranks_build_view("run", &a.so, seeding, &view);
     st = cli_ranks_worst(st);
     char err[SM_MSG_MAX];
-    sm_status rs = st == SM_OK ? cli_ranks_open(&ranks, sm_scene_world(sc), view ? sm_scene_world(view) : NULL, err,
+    sm_status rs = st == SM_OK ? cli_ranks_open(&ranks, sm_scene_world(sc), view ? sm_scene_world(view) : NULL, seeding, err,
                                                 sizeof err)
                                : SM_OK;
     if (rs != SM_OK) fprintf(stderr, "sandmpm run: %s\n", err);
@@ -405,6 +405,7 @@ static int run_command(int argc, char **argv) {
     }
     sm_scene_destroy(sc);
     if (view) sm_scene_destroy(view);
+    cli_seeding_free(seeding);
     if (stopped) return cli_exit_code_signal(stopped);
     if (st == SM_OK && a.video && cli_rank() == 0) st = cli_make_video(out, fps);
     if (cli_stop) return cli_exit_code_signal(cli_stop); /* during the video */

@@ -134,6 +134,24 @@ sm_status cli_load_scene(const char *cmd, const cli_scene_opts *so, sm_scene **s
     return SM_OK;
 }
 
+sm_status cli_build_again(const char *cmd, const cli_scene_opts *so, sm_scene_world_hook hook, void *user,
+                          sm_scene **sc) {
+    char err[1024];
+    const char *path = so->scene ? so->scene : "(built in) scenes/default.lua";
+    const char *source = so->scene ? NULL : sm_default_scene;
+    *sc = NULL;
+    int rc = (int)sm_scene_load(path, source, so->params, so->nparams, so->quality, so->threads, sc, err, sizeof err);
+    if (rc == 0) {
+        sm_scene_on_world(*sc, hook, user);
+        rc = (int)sm_scene_build(*sc, err, sizeof err);
+    }
+    if (rc == 0) return SM_OK;
+    fprintf(stderr, "sandmpm %s: %s\n", cmd, err);
+    sm_scene_destroy(*sc);
+    *sc = NULL;
+    return scene_status(rc);
+}
+
 sm_status cli_check_memory(const char *cmd, const sm_scene_settings *st) {
     double have = cli_machine_bytes();
     if (have > 0 && (double)st->estimated_bytes > 0.9 * have) {

@@ -150,7 +150,48 @@ static int any(void *ctx, int flag) {
     return all;
 }
 
-sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, char *err, size_t errlen) {
+struct cli_seeding {
+    sm_dist_seeding *share; /* the run's world */
+    sm_dist_seeding *view;  /* rank 0's view: a census, so that it stores no particle */
+};
+
+static sm_status census_hook(void *user, sm_world *w) { return sm_world_seed_census(w, user); }
+static sm_status share_hook(void *user, sm_world *w) { return sm_world_seed_share(w, user); }
+
+void cli_seeding_free(cli_seeding *s) {
+    if (!s) return;
+    sm_dist_seeding_destroy(s->share);
+    sm_dist_seeding_destroy(s->view);
+    free(s);
+}
+
+sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *sc, int whole, cli_seeding **seeding) {
+    *seeding = NULL;
+    if (cli_ranks_count() <= 1 || whole) return cli_build_scene(cmd, sc);
+    cli_seeding *s = calloc(1, sizeof *s);
+    sm_status st = s && sm_dist_seeding_create(MPI_COMM_WORLD, &s->share) == SM_OK &&
+                           (cli_rank() != 0 || sm_dist_seeding_create(MPI_COMM_SELF, &s->view) == SM_OK)
+                       ? SM_OK
+                       : SM_ERR_NOMEM;
+    if (st != SM_OK) fprintf(stderr, "sandmpm %s: out of memory\n", cmd);
+    sm_scene *census = NULL;
+    if (st == SM_OK) st = cli_build_again(cmd, so, census_hook, s->share, &census);
+    sm_scene_destroy(census);
+    st = cli_ranks_worst(st);
+    if (st == SM_OK) {
+        sm_scene_on_world(sc, share_hook, s->share);
+        st = cli_ranks_worst(cli_build_scene(cmd, sc));
+    }
+    if (st != SM_OK) cli_seeding_free(s);
+    else *seeding = s;
+    return st;
+}
+
+sm_status cli_ranks_build_view(const char *cmd, const cli_scene_opts *so, cli_seeding *seeding, sm_scene **view) {
+    return seeding ? cli_build_again(cmd, so, census_hook, seeding->view, view) : cli_build_again(cmd, so, NULL, NULL, view);
+}
+
+sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, cli_seeding *seeding, char *err, size_t errlen) {
     memset(r, 0, sizeof *r);
     r->count = cli_ranks_count();
     r->rank = cli_rank();
@@ -158,7 +199,8 @@ sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, char *err, s
     r->view = r->rank == 0 ? view : NULL;
     r->shares = calloc((size_t)r->count, sizeof *r->shares);
     sm_status st = r->shares ? SM_OK : SM_ERR_NOMEM;
-    if (st == SM_OK && (st = sm_world_distribute(w, MPI_COMM_WORLD)) != SM_OK)
+    if (st == SM_OK && (st = seeding ? sm_world_distribute_share(w, seeding->share) : sm_world_distribute(w, MPI_COMM_WORLD)) !=
+                           SM_OK)
         snprintf(err, errlen, "%s", sm_world_errmsg(w));
     else if (st != SM_OK)
         snprintf(err, errlen, "out of memory");
@@ -191,8 +233,18 @@ int cli_ranks_share_bytes(unsigned char **data, size_t *len) {
     (void)data, (void)len;
     return 1;
 }
-sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, char *err, size_t errlen) {
-    (void)w, (void)view, (void)err, (void)errlen;
+sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *sc, int whole, cli_seeding **seeding) {
+    (void)so, (void)whole;
+    *seeding = NULL;
+    return cli_build_scene(cmd, sc);
+}
+sm_status cli_ranks_build_view(const char *cmd, const cli_scene_opts *so, cli_seeding *seeding, sm_scene **view) {
+    (void)seeding;
+    return cli_build_again(cmd, so, NULL, NULL, view);
+}
+void cli_seeding_free(cli_seeding *s) { (void)s; }
+sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, cli_seeding *seeding, char *err, size_t errlen) {
+    (void)w, (void)view, (void)seeding, (void)err, (void)errlen;
     memset(r, 0, sizeof *r);
     r->count = 1;
     return SM_OK;

@@ -11,6 +11,9 @@
  *  - the state does change (the hash after the run differs from the start's);
  *  - a checkpoint written half way on N ranks (collective; rank 0 writes it) resumes on N - 1
  *    ranks (1 when N = 1) to the same final hash;
+ *  - seeding by shares (sm_dist_seeding: a census build, then each rank builds its share only)
+ *    leaves every rank the particles, order and fields of sm_world_distribute of the whole world,
+ *    and 4 frames later the same state and traffic; misuse is refused;
  *  - messages in pieces (dist/message.c; a rank's share can pass MPI's INT_MAX bytes): the 2D
  *    run sends every message, the checkpoint's gather included, in pieces of 997 bytes (prime: no
  *    piece boundary falls between particles), and rank 0's last message is several pieces. */
@@ -25,6 +28,8 @@
 #define FRAME_DT (1.0 / 120)
 
 static int rank, ranks;
+static sm_dist_seeding *seeding; /* build(): a census (seeding_census) or a share of it; NULL: neither */
+static int seeding_census;
 static sm_kernel kernel = SM_KERNEL_QUADRATIC; /* the explicit runs': the ghosts a particle needs depend on its support */
 
 static sm_world *build(int dim, int threads, size_t *ball_id, int implicit) {
@@ -40,6 +45,7 @@ static sm_world *build(int dim, int threads, size_t *ball_id, int implicit) {
     sm_world *w = NULL;
     char err[256];
     if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) return NULL;
+    if (seeding) CHECK((seeding_census ? sm_world_seed_census(w, seeding) : sm_world_seed_share(w, seeding)) == SM_OK);
     sm_material_def m = sm_material_def_sand();
     int sand = -1, ball = -1;
     CHECK(sm_world_add_material(w, &m, &sand) == SM_OK);
@@ -241,6 +247,79 @@ static void run(int dim) {
     sm_world_destroy(w);
 }
 
+/* The particles of a and b the same (count, order, every field read here). */
+static int same_particles(const sm_world *a, const sm_world *b) {
+    sm_particles_view p, q;
+    sm_world_particles(a, &p);
+    sm_world_particles(b, &q);
+    const size_t n = p.n, d = (size_t)p.dim, r = sizeof(sm_real);
+    return n == q.n && !memcmp(p.id, q.id, n * sizeof *p.id) && !memcmp(p.x, q.x, n * d * sizeof *p.x) &&
+           !memcmp(p.v, q.v, n * d * r) && !memcmp(p.F, q.F, n * d * d * r) && !memcmp(p.B, q.B, n * d * d * r) &&
+           !memcmp(p.vol0, q.vol0, n * r) && !memcmp(p.q, q.q, n * r) && !memcmp(p.material, q.material, n * 2);
+}
+
+/* Seeding across ranks (sm_dist_seeding): a census build, then each rank builds only its share;
+ * every rank then holds what sm_world_distribute of the whole world leaves it (the same particles
+ * in the same order, fields and ids), and the run goes on with the same bits and traffic; misuse
+ * is refused. */
+static void run_seeded(int dim) {
+    size_t ball_id = 0;
+    sm_world *whole = build(dim, 1, &ball_id, 0);
+    CHECK(whole != NULL);
+    if (!whole) return;
+    sm_particles_view pv;
+    sm_world_particles(whole, &pv);
+    const size_t total = pv.n;
+    CHECK(sm_world_distribute(whole, MPI_COMM_WORLD) == SM_OK);
+    CHECK(sm_dist_seeding_create(MPI_COMM_WORLD, &seeding) == SM_OK);
+    seeding_census = 1;
+    sm_world *census = build(dim, 1, &ball_id, 0);
+    CHECK(census != NULL);
+    sm_world_particles(census, &pv);
+    CHECK(pv.n == 0); /* counted, not stored */
+    CHECK(sm_world_seed_share(census, seeding) == SM_ERR_INVALID); /* a world with particles (ids given) */
+    sm_world_destroy(census);
+    seeding_census = 0;
+    sm_world *share = build(dim, 1, &ball_id, 0); /* sm_world_seed_share: collective */
+    CHECK(share != NULL);
+    sm_world_particles(share, &pv);
+    if (ranks > 1) CHECK(pv.n < total);
+    CHECK(same_particles(whole, share)); /* before either steps */
+    CHECK(sm_world_distribute_share(share, seeding) == SM_OK);
+    sm_dist_seeding_destroy(seeding);
+    seeding = NULL;
+    CHECK(same_particles(whole, share));
+    for (int f = 1; f <= 4; f++) {
+        CHECK(sm_world_advance(whole, f * FRAME_DT) == SM_OK);
+        CHECK(sm_world_advance(share, f * FRAME_DT) == SM_OK);
+    }
+    CHECK(same_particles(whole, share));
+    const uint64_t hw = sm_world_id_hash(whole), hs = sm_world_id_hash(share);
+    CHECK(hw == hs);
+    sm_dist_stats a, b;
+    sm_world_dist_stats(whole, &a);
+    sm_world_dist_stats(share, &b);
+    CHECK(a.bytes_sent == b.bytes_sent && a.rebalances == b.rebalances);
+    if (rank == 0)
+        printf("%dD seeded by shares on %d ranks: rank 0 built %zu of %zu particles; after 4 frames id hash %016llx "
+               "(whole world distributed: %016llx)\n",
+               dim, ranks, pv.n, total, (unsigned long long)hs, (unsigned long long)hw);
+    /* Misuse: a share without a census; a world that did not join, handed to sm_world_distribute_share. */
+    sm_dist_seeding *s2 = NULL;
+    CHECK(sm_dist_seeding_create(MPI_COMM_WORLD, &s2) == SM_OK);
+    sm_world_def def = sm_world_def_default();
+    def.dim = dim;
+    sm_world *plain = NULL;
+    char err[256];
+    CHECK(sm_world_create(&def, &plain, err, sizeof err) == SM_OK);
+    CHECK(sm_world_seed_share(plain, s2) == SM_ERR_INVALID);
+    CHECK(sm_world_distribute_share(plain, s2) == SM_ERR_INVALID); /* collective: every rank refuses */
+    sm_dist_seeding_destroy(s2);
+    sm_world_destroy(plain);
+    sm_world_destroy(share);
+    sm_world_destroy(whole);
+}
+
 /* The implicit integrator on N ranks: the one-rank bits (2 threads there, 1 per rank here), the
  * Newton and GMRES counts of rank 0 equal to the one-rank run's, and grid traffic between ranks. */
 static void run_implicit(int dim, int frames) {
@@ -302,6 +381,8 @@ int main(int argc, char **argv) {
     kernel = SM_KERNEL_QUADRATIC;
     run_implicit(2, 3);
     run_implicit(3, 2);
+    run_seeded(2);
+    run_seeded(3);
     int mine = sm_test_failures, all = 0;
     MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     MPI_Finalize();

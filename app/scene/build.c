@@ -73,6 +73,11 @@ static sm_status seed_objects(sm_scene *s, sm_world *w, char *err, size_t errlen
     return SM_OK;
 }
 
+void sm_scene_on_world(sm_scene *s, sm_scene_world_hook hook, void *user) {
+    s->on_world = hook;
+    s->on_world_user = user;
+}
+
 sm_status sm_scene_build(sm_scene *s, char *err, size_t errlen) {
     if (err && errlen) err[0] = 0;
     if (!s) return sc_fail_msg(err, errlen, SM_ERR_INVALID, "sm_scene_build: scene is NULL");
@@ -82,6 +87,8 @@ sm_status sm_scene_build(sm_scene *s, char *err, size_t errlen) {
     sm_world *w = NULL;
     sm_status st = sm_world_create(&s->def, &w, msg, sizeof msg);
     if (st != SM_OK) return sc_fail_msg(err, errlen, scene_status(st), "%s: %s", s->path, msg);
+    if (s->on_world && (st = s->on_world(s->on_world_user, w)) != SM_OK)
+        st = sc_fail_msg(err, errlen, st, "%s: %s", s->path, sm_world_errmsg(w));
     for (int i = 0; i < s->nmat && st == SM_OK; i++)
         if ((st = sm_world_add_material(w, &s->mats[i], NULL)) != SM_OK)
             st = sc_fail_msg(err, errlen, scene_status(st), "%s: materials.%s: %s", s->path, s->mat_names[i],

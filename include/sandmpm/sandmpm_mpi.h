@@ -13,7 +13,15 @@
  * calling rank's particles. sm_world_save is collective: rank 0 writes one checkpoint of the whole
  * run (every particle, in id order), which resumes on any number of ranks (sm_world_load on each,
  * then sm_world_distribute) or on none. The implicit integrator runs across ranks too, with the
- * same bits (its inner products are exact sums: the same on any number of ranks). */
+ * same bits (its inner products are exact sums: the same on any number of ranks).
+ *
+ * A world too large for one rank's memory is built twice instead, with an sm_dist_seeding:
+ * first a census (sm_world_seed_census on a new world, then its materials, colliders and
+ * particles as usual: the particles are counted per grid block and none is stored; destroy it),
+ * then the world itself (sm_world_seed_share on a new world, then the same build again: each rank
+ * stores only the particles of its share) and sm_world_distribute_share. The ranks end as
+ * sm_world_distribute of the whole world would leave them: the same particles, ids and cuts,
+ * and the same results. */
 #ifndef SANDMPM_MPI_H
 #define SANDMPM_MPI_H
 
@@ -30,6 +38,22 @@ extern "C" {
  * otherwise). Cuts the grid blocks, in Morton order, into one contiguous range per rank with
  * about equal particle counts, and keeps the particles of this rank's range. */
 SM_API sm_status sm_world_distribute(sm_world *w, MPI_Comm comm);
+
+/** Seeding across ranks (see above). Every call is made on every rank of comm, in the same order;
+ * sm_world_seed_share and sm_world_distribute_share are collective. A seeding serves one census
+ * and one share. The census and the share's worlds must have the same grid (dimension, dx, domain,
+ * kernel) and no particles when they join; a failure is SM_ERR_INVALID (a misuse, or ranks whose
+ * censuses or shares disagree) or SM_ERR_NOMEM, with the message in sm_world_errmsg. */
+typedef struct sm_dist_seeding sm_dist_seeding;
+SM_API sm_status sm_dist_seeding_create(MPI_Comm comm, sm_dist_seeding **out);
+SM_API void sm_dist_seeding_destroy(sm_dist_seeding *s);
+/** From now on w counts the particles added to it (seeding, sm_world_add_particles) and stores none. */
+SM_API sm_status sm_world_seed_census(sm_world *w, sm_dist_seeding *s);
+/** Cuts the blocks from the census (collective); from now on w stores only this rank's particles. */
+SM_API sm_status sm_world_seed_share(sm_world *w, sm_dist_seeding *s);
+/** Makes w, built since sm_world_seed_share, this rank's part of the run (collective; checks that
+ * the ranks kept every particle of the census once). s may be destroyed afterwards. */
+SM_API sm_status sm_world_distribute_share(sm_world *w, sm_dist_seeding *s);
 
 /** What the decomposition did: this rank and the number of ranks, this rank's particles, the
  * largest and the mean particle count over the ranks after the last step's migration, the

@@ -98,7 +98,7 @@ static long block_histogram(sm_dist *d, const sm_particles *P, size_t n) {
     return np;
 }
 
-static void cuts_from_histogram(sm_dist *d, const uint64_t *pairs, size_t np) {
+void sm_dist_cuts_from_histogram(sm_dist *d, const uint64_t *pairs, size_t np) {
     uint64_t total = 0;
     for (size_t i = 0; i < np; i++) total += pairs[2 * i + 1];
     d->cuts[0] = 0;
@@ -129,7 +129,7 @@ sm_status sm_dist_recut(sm_world *w) {
     if (!all) return sm_world_fail(w, SM_ERR_NOMEM, "distributed run: out of memory for the block histogram");
     MPI_Allgatherv(d->hist, pairs2, MPI_UINT64_T, all, counts, displs, MPI_UINT64_T, d->comm);
     /* The ranks' blocks lie in their ranges, ranges in rank order: the concatenation is sorted. */
-    cuts_from_histogram(d, all, (size_t)total / 2);
+    sm_dist_cuts_from_histogram(d, all, (size_t)total / 2);
     free(all);
     d->stats.rebalances++;
     return SM_OK;
@@ -286,7 +286,7 @@ void sm_dist_free(sm_dist *d) {
     free(d);
 }
 
-static sm_dist *dist_create(const sm_world *w, MPI_Comm comm) {
+sm_dist *sm_dist_create(const sm_world *w, MPI_Comm comm) {
     sm_dist *d = calloc(1, sizeof *d);
     if (!d) return NULL;
     MPI_Comm_dup(comm, &d->comm);
@@ -323,7 +323,7 @@ sm_status sm_world_distribute(sm_world *w, MPI_Comm comm) {
                              "sm_world_distribute: the ranks' worlds differ (%llu to %llu particles, different states): "
                              "every rank must build the same world",
                              (unsigned long long)lo[1], (unsigned long long)hi[1]);
-    sm_dist *d = dist_create(w, comm);
+    sm_dist *d = sm_dist_create(w, comm);
     if (!d) return sm_world_fail(w, SM_ERR_NOMEM, "sm_world_distribute: out of memory");
     /* Every rank holds every particle: the same histogram everywhere, no communication. */
     d->owned = w->p.n;
@@ -332,7 +332,7 @@ sm_status sm_world_distribute(sm_world *w, MPI_Comm comm) {
         sm_dist_free(d);
         return sm_world_fail(w, SM_ERR_NOMEM, "sm_world_distribute: out of memory");
     }
-    cuts_from_histogram(d, d->hist, (size_t)np);
+    sm_dist_cuts_from_histogram(d, d->hist, (size_t)np);
     w->dist = d;
     sm_dist_adopt(w, 0);
     w->bins.keep_storage = 1;

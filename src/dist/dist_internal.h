@@ -58,6 +58,10 @@ int sm_dist_owner(const sm_dist *d, uint64_t m);
 /* Grows buf to hold `need` bytes; 0 when out of memory. */
 int sm_dist_buf_reserve(sm_dist_buf *buf, size_t need);
 void sm_dist_halo_free(sm_dist_halo *h);
+/* rank r's range from the (Morton code, particles) pairs of every block, ascending code. */
+void sm_dist_cuts_from_histogram(sm_dist *d, const uint64_t *pairs, size_t np);
+/* A decomposition for w over comm (duplicated), its cuts all 0; NULL when out of memory. */
+sm_dist *sm_dist_create(const struct sm_world *w, MPI_Comm comm);
 /* Re-cuts the blocks by the particles every rank holds in [0, owned) (collective). */
 sm_status sm_dist_recut(struct sm_world *w);
 

@@ -87,8 +87,39 @@ static int keep_point(const sm_shape *shape, const sm_shape *clip, int dim, cons
     return 1;
 }
 
+/* Where a seeding's points go, pass after pass (sm_world_seed_shape): counted, then summed into
+ * their centroid (for the angular velocity), then added to the world SEED_CHUNK at a time, so
+ * that no more than a chunk of a shape's points is held at once (a rank of a distributed world
+ * keeps only its share of them). */
+#define SEED_CHUNK ((size_t)1 << 16)
+enum { SINK_COUNT, SINK_CENTRE, SINK_ADD };
+typedef struct seed_sink {
+    sm_world *w;
+    const sm_seed_def *sd;
+    int pass;
+    size_t n;      /* the shape's points (SINK_COUNT) */
+    double cen[3]; /* their centroid (SINK_CENTRE) */
+    ptbuf chunk;   /* points not yet added (SINK_ADD) */
+    sm_status st;  /* the first failure of an add */
+} seed_sink;
+
+static int sink_flush(seed_sink *k);
+
+/* 0 when out of memory or an add failed (k->st). */
+static int sink_point(seed_sink *k, const double x[3]) {
+    switch (k->pass) {
+    case SINK_COUNT: k->n++; return 1;
+    case SINK_CENTRE:
+        for (int a = 0; a < 3; a++) k->cen[a] += x[a] / (double)k->n;
+        return 1;
+    default:
+        if (!ptbuf_push(&k->chunk, x)) return 0;
+        return k->chunk.n < SEED_CHUNK || sink_flush(k);
+    }
+}
+
 static int seed_jittered(const sm_world *w, const sm_shape *shape, const sm_seed_def *sd, const double bmin[3],
-                         const double bmax[3], ptbuf *out) {
+                         const double bmax[3], seed_sink *out) {
     const int d = w->dim;
     const double h = w->def.dx / pow(sd->ppc, 1.0 / d);
     const double *lo = w->def.domain_min;
@@ -111,7 +142,7 @@ static int seed_jittered(const sm_world *w, const sm_shape *shape, const sm_seed
                     if (x[a] < bmin[a] || x[a] > bmax[a]) inside = 0;
                 }
                 if (!inside || !keep_point(shape, sd->clip, d, x)) continue;
-                if (!ptbuf_push(out, x)) return 0;
+                if (!sink_point(out, x)) return 0;
             }
     return 1;
 }
@@ -244,6 +275,39 @@ static int seed_poisson(const sm_world *w, const sm_shape *shape, const sm_seed_
     return ok;
 }
 
+/* The points of the chunk added with their velocities, v + omega x (x - centroid) (the centroid
+ * is 0 when omega is: no spin); the chunk emptied. */
+static int sink_flush(seed_sink *k) {
+    const int d = k->w->dim;
+    const double *om = k->sd->angular_velocity, *cen = k->cen, *x = k->chunk.x;
+    const size_t n = k->chunk.n;
+    if (n == 0) return 1;
+    double *vel = sm_malloc(n * 3 * sizeof(double));
+    if (!vel) return 0;
+    for (size_t i = 0; i < n; i++) {
+        double r[3] = {x[3 * i] - cen[0], x[3 * i + 1] - cen[1], x[3 * i + 2] - cen[2]};
+        if (d == 2) r[2] = 0;
+        double wx = d == 2 ? 0 : om[0], wy = d == 2 ? 0 : om[1], wz = om[2];
+        vel[3 * i + 0] = k->sd->velocity[0] + wy * r[2] - wz * r[1];
+        vel[3 * i + 1] = k->sd->velocity[1] + wz * r[0] - wx * r[2];
+        vel[3 * i + 2] = d == 2 ? 0 : k->sd->velocity[2] + wx * r[1] - wy * r[0];
+    }
+    k->st = sm_world_add_particles(k->w, n, x, vel, k->sd->material, k->sd->ppc);
+    free(vel);
+    k->chunk.n = 0;
+    return k->st == SM_OK;
+}
+
+/* One pass of the shape's points into k: the jittered lattice generated again, or Poisson's
+ * samples (made once, into *pts, on the first pass). */
+static int seed_points(seed_sink *k, const sm_shape *shape, const double bmin[3], const double bmax[3], ptbuf *pts) {
+    if (k->sd->method == SM_SEED_JITTERED) return seed_jittered(k->w, shape, k->sd, bmin, bmax, k);
+    if (k->pass == SINK_COUNT && !seed_poisson(k->w, shape, k->sd, bmin, bmax, pts)) return 0;
+    for (size_t i = 0; i < pts->n; i++)
+        if (!sink_point(k, pts->x + 3 * i)) return 0;
+    return 1;
+}
+
 sm_status sm_world_seed_shape(sm_world *w, const sm_shape *shape, const sm_seed_def *sd, size_t *added) {
     if (added) *added = 0;
     if (!shape || !sd) return sm_world_fail(w, SM_ERR_INVALID, "seed: shape and seed definition are required");
@@ -270,36 +334,22 @@ sm_status sm_world_seed_shape(sm_world *w, const sm_shape *shape, const sm_seed_
     shape_bounds(shape, d, lo, hi, bmin, bmax);
     for (int a = 0; a < d; a++)
         if (!(bmax[a] > bmin[a])) return SM_OK; /* nothing of the shape inside the domain */
-    ptbuf pts = {0};
-    int ok = sd->method == SM_SEED_JITTERED ? seed_jittered(w, shape, sd, bmin, bmax, &pts)
-                                            : seed_poisson(w, shape, sd, bmin, bmax, &pts);
-    if (!ok) {
-        free(pts.x);
-        return sm_world_fail(w, SM_ERR_NOMEM, "seed: out of memory");
+    seed_sink k = {w, sd, SINK_COUNT, 0, {0, 0, 0}, {0}, SM_OK};
+    ptbuf pts = {0}; /* Poisson's samples: the sampler needs them all at once */
+    int ok = seed_points(&k, shape, bmin, bmax, &pts);
+    if (ok && k.n > 0 && !w->keep && !w->dist) { /* one process: the storage at its exact size, as one add made it */
+        k.st = sm_world_reserve_particles(w, w->p.n + k.n);
+        ok = k.st == SM_OK;
     }
-    sm_status st = SM_OK;
-    if (pts.n > 0) {
-        double *vel = sm_malloc(pts.n * 3 * sizeof(double));
-        if (!vel) {
-            free(pts.x);
-            return sm_world_fail(w, SM_ERR_NOMEM, "seed: out of memory");
-        }
-        double cen[3] = {0, 0, 0};
-        for (size_t i = 0; i < pts.n; i++)
-            for (int a = 0; a < 3; a++) cen[a] += pts.x[3 * i + a] / (double)pts.n;
-        const double *om = sd->angular_velocity;
-        for (size_t i = 0; i < pts.n; i++) {
-            double r[3] = {pts.x[3 * i] - cen[0], pts.x[3 * i + 1] - cen[1], pts.x[3 * i + 2] - cen[2]};
-            if (d == 2) r[2] = 0;
-            double wx = d == 2 ? 0 : om[0], wy = d == 2 ? 0 : om[1], wz = om[2];
-            vel[3 * i + 0] = sd->velocity[0] + wy * r[2] - wz * r[1];
-            vel[3 * i + 1] = sd->velocity[1] + wz * r[0] - wx * r[2];
-            vel[3 * i + 2] = d == 2 ? 0 : sd->velocity[2] + wx * r[1] - wy * r[0];
-        }
-        st = sm_world_add_particles(w, pts.n, pts.x, vel, sd->material, sd->ppc);
-        free(vel);
-        if (st == SM_OK && added) *added = pts.n;
+    const double *om = sd->angular_velocity;
+    const int spins = om[2] != 0 || (w->dim == 3 && (om[0] != 0 || om[1] != 0));
+    for (int pass = spins ? SINK_CENTRE : SINK_ADD; ok && k.n > 0 && pass <= SINK_ADD; pass++) {
+        k.pass = pass;
+        ok = seed_points(&k, shape, bmin, bmax, &pts) && (pass != SINK_ADD || sink_flush(&k));
     }
     free(pts.x);
-    return st;
+    free(k.chunk.x);
+    if (!ok) return k.st != SM_OK ? k.st : sm_world_fail(w, SM_ERR_NOMEM, "seed: out of memory");
+    if (added) *added = k.n;
+    return SM_OK;
 }

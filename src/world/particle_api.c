@@ -5,7 +5,7 @@
 
 #include "world/world.h"
 
-static sm_status reserve_particles(sm_world *w, size_t n) {
+sm_status sm_world_reserve_particles(sm_world *w, size_t n) {
     if (w->def.max_particles && n > w->def.max_particles)
         return sm_world_fail(w, SM_ERR_INVALID, "particles: %zu would exceed max_particles = %zu", n, w->def.max_particles);
     if (n > 0x7fffffffu) return sm_world_fail(w, SM_ERR_INVALID, "particles: at most %u supported", 0x7fffffffu);
@@ -35,15 +35,30 @@ sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions,
                 return sm_world_fail(w, SM_ERR_INVALID, "particle %zu: velocity is not finite", i);
         }
     }
+    if (w->next_id + n > 0x7fffffffu)
+        return sm_world_fail(w, SM_ERR_INVALID, "particles: ids past %u not supported (%llu given out)", 0x7fffffffu,
+                             (unsigned long long)w->next_id);
+    unsigned char *kept = NULL; /* w->keep's answer per particle, asked once each */
+    size_t nkept = n;
+    if (w->keep) {
+        if (!(kept = sm_malloc(n))) return sm_world_fail(w, SM_ERR_NOMEM, "out of memory for %zu particles", n);
+        nkept = 0;
+        for (size_t i = 0; i < n; i++) nkept += kept[i] = w->keep(w->keep_user, positions + i * 3) != 0;
+    }
     size_t first = w->p.n;
-    sm_status st = reserve_particles(w, first + n);
-    if (st != SM_OK) return st;
+    sm_status st = sm_world_reserve_particles(w, first + nkept);
+    if (st != SM_OK) {
+        free(kept);
+        return st;
+    }
     const sm_material_rt *m = &w->mats[material];
     double vol0 = pow(w->def.dx, d) / ppc;
     sm_particles *P = &w->p;
-    sm_particles_init_rest(P, d, first, n);
+    sm_particles_init_rest(P, d, first, nkept);
+    size_t p = first;
     for (size_t i = 0; i < n; i++) {
-        size_t p = first + i;
+        const uint64_t id = w->next_id++; /* a particle not kept still takes its id */
+        if (kept && !kept[i]) continue;
         for (int a = 0; a < d; a++) {
             P->x[p * d + a] = positions[i * 3 + a];
             P->v[p * d + a] = velocities ? (sm_real)velocities[i * 3 + a] : 0;
@@ -51,9 +66,11 @@ sm_status sm_world_add_particles(sm_world *w, size_t n, const double *positions,
         P->vol0[p] = (sm_real)vol0;
         P->alpha[p] = m->alpha0;
         P->mat[p] = (uint16_t)material;
-        P->id[p] = (uint32_t)w->next_id++;
+        P->id[p] = (uint32_t)id;
+        p++;
     }
-    P->n = first + n;
+    free(kept);
+    P->n = first + nkept;
     if (w->dist) sm_dist_adopt(w, first); /* every rank added them: each keeps its blocks' */
     w->dirty = 1;
     return SM_OK;

@@ -80,6 +80,10 @@ struct sm_world {
     int dirty;              /* particles changed outside a step since the last G2P: scan them */
     int failed;             /* a numerical failure stopped the world */
     uint64_t next_id;       /* the id the next added particle gets (particles.h's field id) */
+    int (*keep)(void *user, const double x[3]); /* sm_world_add_particles stores only the particles it
+                                                   keeps (ids still count every one); NULL: all.
+                                                   A distributed world's seeding (dist/seeding.c) */
+    void *keep_user;
     int (*interrupt)(void *user); /* sm_world_set_interrupt: non-zero stops sm_world_advance (not saved) */
     void *interrupt_user;
     int interrupted;        /* the last sm_world_advance returned early for it */
@@ -96,6 +100,8 @@ sm_status sm_world_fail(sm_world *w, sm_status status, const char *fmt, ...)
 
 /* Runs the emitters for the step [t0, t1] (particles/emit.c). */
 sm_status sm_world_run_emitters(sm_world *w, double t0, double t1);
+/* Room for n particles in all (max_particles and the id range checked; particle_api.c). */
+sm_status sm_world_reserve_particles(sm_world *w, size_t n);
 
 /* Mass of particle p. */
 static inline sm_real sm_particle_mass(const sm_material_rt *mats, const sm_particles *P, size_t p) {

@@ -120,12 +120,17 @@ static void print_warnings(const char *cmd, const sm_scene *sc, int first) {
 /* The scene loader's result codes (2 bad input, 5 out of memory) as a status. */
 static sm_status scene_status(int rc) { return rc == (int)SM_ERR_NOMEM ? SM_ERR_NOMEM : SM_ERR_INVALID; }
 
-sm_status cli_load_scene(const char *cmd, const cli_scene_opts *so, sm_scene **sc) {
-    char err[1024];
+/* so's scene loaded (the file or the embedded default); the loader's result code. */
+static int load_scene(const cli_scene_opts *so, sm_scene **sc, char *err, size_t errlen) {
     /* The built-in scene is named for the file it was compiled from (messages say scenes/default.lua:LINE). */
     const char *path = so->scene ? so->scene : "(built in) scenes/default.lua";
     const char *source = so->scene ? NULL : sm_default_scene;
-    int rc = (int)sm_scene_load(path, source, so->params, so->nparams, so->quality, so->threads, sc, err, sizeof err);
+    return (int)sm_scene_load(path, source, so->params, so->nparams, so->quality, so->threads, sc, err, errlen);
+}
+
+sm_status cli_load_scene(const char *cmd, const cli_scene_opts *so, sm_scene **sc) {
+    char err[1024];
+    int rc = load_scene(so, sc, err, sizeof err);
     if (rc != 0) {
         fprintf(stderr, "sandmpm %s: %s\n", cmd, err);
         return scene_status(rc);
@@ -137,10 +142,8 @@ sm_status cli_load_scene(const char *cmd, const cli_scene_opts *so, sm_scene **s
 sm_status cli_build_again(const char *cmd, const cli_scene_opts *so, sm_scene_world_hook hook, void *user,
                           sm_scene **sc) {
     char err[1024];
-    const char *path = so->scene ? so->scene : "(built in) scenes/default.lua";
-    const char *source = so->scene ? NULL : sm_default_scene;
     *sc = NULL;
-    int rc = (int)sm_scene_load(path, source, so->params, so->nparams, so->quality, so->threads, sc, err, sizeof err);
+    int rc = load_scene(so, sc, err, sizeof err);
     if (rc == 0) {
         sm_scene_on_world(*sc, hook, user);
         rc = (int)sm_scene_build(*sc, err, sizeof err);

@@ -188,7 +188,7 @@ sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *s
 }
 
 sm_status cli_ranks_build_view(const char *cmd, const cli_scene_opts *so, cli_seeding *seeding, sm_scene **view) {
-    return seeding ? cli_build_again(cmd, so, census_hook, seeding->view, view) : cli_build_again(cmd, so, NULL, NULL, view);
+    return cli_build_again(cmd, so, seeding ? census_hook : NULL, seeding ? seeding->view : NULL, view);
 }
 
 sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, cli_seeding *seeding, char *err, size_t errlen) {

@@ -64,7 +64,7 @@ int sm_dist_buf_reserve(sm_dist_buf *buf, size_t need) {
     return 1;
 }
 
-static int cmp_u64(const void *a, const void *b) {
+int sm_dist_cmp_u64(const void *a, const void *b) {
     const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
     return (x > y) - (x < y);
 }
@@ -84,7 +84,7 @@ static long block_histogram(sm_dist *d, const sm_particles *P, size_t n) {
         sm_dist_particle_block(d, P->x + i * (size_t)d->dim, b);
         codes[i] = sm_dist_morton(d->dim, b);
     }
-    qsort(codes, n, sizeof *codes, cmp_u64);
+    qsort(codes, n, sizeof *codes, sm_dist_cmp_u64);
     long np = 0;
     for (size_t i = 0; i < n;) {
         size_t j = i;
@@ -245,7 +245,7 @@ sm_status sm_dist_save(const sm_world *w, sm_write_fn write, void *user) {
         if (!order || !pairs) st = SM_ERR_NOMEM;
         else {
             for (size_t i = 0; i < P.n; i++) pairs[i] = ((uint64_t)P.id[i] << 32) | i;
-            qsort(pairs, P.n, sizeof *pairs, cmp_u64);
+            qsort(pairs, P.n, sizeof *pairs, sm_dist_cmp_u64);
             for (size_t i = 0; i < P.n; i++) order[i] = (uint32_t)pairs[i];
             sm_particles_permute(&P, w->dim, order);
             sm_world one = *w; /* a shallow copy: the save only reads it */
@@ -313,6 +313,12 @@ sm_dist *sm_dist_create(const sm_world *w, MPI_Comm comm) {
     return d;
 }
 
+void sm_dist_attach(sm_world *w, sm_dist *d) {
+    w->dist = d;
+    w->bins.keep_storage = 1;
+    w->dirty = 1;
+}
+
 sm_status sm_world_distribute(sm_world *w, MPI_Comm comm) {
     if (w->dist) return sm_world_fail(w, SM_ERR_INVALID, "sm_world_distribute: the world is distributed already");
     uint64_t h[2] = {sm_world_state_hash(w), (uint64_t)w->p.n}, lo[2], hi[2];
@@ -333,10 +339,8 @@ sm_status sm_world_distribute(sm_world *w, MPI_Comm comm) {
         return sm_world_fail(w, SM_ERR_NOMEM, "sm_world_distribute: out of memory");
     }
     sm_dist_cuts_from_histogram(d, d->hist, (size_t)np);
-    w->dist = d;
+    sm_dist_attach(w, d);
     sm_dist_adopt(w, 0);
-    w->bins.keep_storage = 1;
-    w->dirty = 1;
     return SM_OK;
 }
 

@@ -62,6 +62,10 @@ void sm_dist_halo_free(sm_dist_halo *h);
 void sm_dist_cuts_from_histogram(sm_dist *d, const uint64_t *pairs, size_t np);
 /* A decomposition for w over comm (duplicated), its cuts all 0; NULL when out of memory. */
 sm_dist *sm_dist_create(const struct sm_world *w, MPI_Comm comm);
+/* d becomes w's decomposition (the binning keeps its storage; the next step checks every particle). */
+void sm_dist_attach(struct sm_world *w, sm_dist *d);
+/* qsort's comparison of uint64_t values, ascending. */
+int sm_dist_cmp_u64(const void *a, const void *b);
 /* Re-cuts the blocks by the particles every rank holds in [0, owned) (collective). */
 sm_status sm_dist_recut(struct sm_world *w);
 

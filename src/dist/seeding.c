@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/hash.h"
 #include "dist/dist_internal.h"
 #include "world/world.h"
 
@@ -35,15 +36,10 @@ struct sm_dist_seeding {
     uint64_t kept;      /* particles kept by the share */
 };
 
-static int cmp_u64(const void *a, const void *b) {
-    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return (x > y) - (x < y);
-}
-
 /* The pending codes merged into the pairs (sorted, counts added where a block is in both). */
 static int merge_pending(sm_dist_seeding *s) {
     if (s->npending == 0) return 1;
-    qsort(s->pending, s->npending, sizeof *s->pending, cmp_u64);
+    qsort(s->pending, s->npending, sizeof *s->pending, sm_dist_cmp_u64);
     uint64_t *out = malloc((2 * (s->npairs + s->npending)) * sizeof *out);
     if (!out) return 0;
     size_t n = 0, i = 0, j = 0;
@@ -148,9 +144,8 @@ static sm_status cut(sm_world *w, sm_dist_seeding *s) {
     int bad = !merge_pending(s) || s->failed, any_bad = 0;
     MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, s->comm);
     if (any_bad) return sm_world_fail(w, SM_ERR_NOMEM, "sm_world_seed_share: out of memory for the census");
-    uint64_t h = 0x9e3779b97f4a7c15ULL; /* FNV-style hash of the pairs: the ranks' censuses agree */
-    for (size_t i = 0; i < 2 * s->npairs; i++) h = (h ^ s->pairs[i]) * 0x100000001b3ULL;
-    uint64_t mine[2] = {s->counted, h}, lo[2], hi[2];
+    /* the ranks' censuses agree: the same count and pairs */
+    uint64_t mine[2] = {s->counted, sm_hash64(s->pairs, 2 * s->npairs * sizeof *s->pairs, 0)}, lo[2], hi[2];
     MPI_Allreduce(mine, lo, 2, MPI_UINT64_T, MPI_MIN, s->comm);
     MPI_Allreduce(mine, hi, 2, MPI_UINT64_T, MPI_MAX, s->comm);
     if (lo[0] != hi[0] || lo[1] != hi[1])
@@ -202,8 +197,6 @@ sm_status sm_world_distribute_share(sm_world *w, sm_dist_seeding *s) {
     d->owned = w->p.n;
     w->keep = NULL; /* particles added from now on (emitters): on every rank, each keeps its blocks' */
     w->keep_user = NULL;
-    w->dist = d;
-    w->bins.keep_storage = 1;
-    w->dirty = 1;
+    sm_dist_attach(w, d);
     return SM_OK;
 }

@@ -162,11 +162,80 @@ static int holder(const sm_world *w, size_t id) {
     return all;
 }
 
+
+/* The ranks' id slices of w tile the id order, and their parts of the checkpoint stream, laid
+ * over each other, are the bytes sm_world_save gathered on rank 0 (ck there), each byte written
+ * by exactly one rank. */
+typedef struct part_buf {
+    unsigned char *data, *cover; /* the stream; 1 where this rank wrote */
+    uint64_t len;
+} part_buf;
+
+static int part_write(void *user, uint64_t at, const void *data, size_t len) {
+    part_buf *b = user;
+    if (!b->data) return 0; /* the sizing pass */
+    if (at + len > b->len) return 1;
+    memcpy(b->data + at, data, len);
+    for (size_t k = 0; k < len; k++) b->cover[at + k]++;
+    return 0;
+}
+
+static void check_slices(const sm_world *w, const sm_test_membuf *ck) {
+    sm_id_slice *s = NULL;
+    CHECK(sm_world_id_slice(w, &s) == SM_OK);
+    if (!s) return;
+    sm_particles_view pv;
+    sm_world_particles(sm_id_slice_world(s), &pv);
+    uint64_t n = pv.n, first = sm_id_slice_first(s), total = 0;
+    for (size_t i = 1; i < pv.n; i++) CHECK(pv.id[i - 1] < pv.id[i]);
+    /* tiling: rank r's slice starts where rank r - 1's ends */
+    uint64_t end = first + n, prev_end = 0;
+    MPI_Sendrecv(&end, 1, MPI_UINT64_T, (rank + 1) % ranks, 5, &prev_end, 1, MPI_UINT64_T, (rank + ranks - 1) % ranks, 5,
+                 MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    CHECK(first == (rank ? prev_end : 0));
+    MPI_Allreduce(&n, &total, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
+    CHECK(total == sm_id_slice_total(s));
+    part_buf b = {NULL, NULL, 0};
+    uint64_t len = 0;
+    CHECK(sm_id_slice_save(s, part_write, &b, &len) == SM_OK);
+    b.len = len;
+    b.data = calloc(len, 1);
+    b.cover = calloc(len, 1);
+    unsigned char *all = malloc(len), *cover = malloc(len);
+    CHECK(b.data && b.cover && all && cover);
+    if (b.data && b.cover && all && cover) {
+        uint64_t len2 = 0;
+        CHECK(sm_id_slice_save(s, part_write, &b, &len2) == SM_OK && len2 == len);
+        for (uint64_t at = 0; at < len; at += 1u << 30) { /* MPI counts are int */
+            const int m = (int)(len - at < (1u << 30) ? len - at : (1u << 30));
+            MPI_Allreduce(b.data + at, all + at, m, MPI_BYTE, MPI_BOR, MPI_COMM_WORLD);
+            MPI_Allreduce(b.cover + at, cover + at, m, MPI_UNSIGNED_CHAR, MPI_SUM, MPI_COMM_WORLD);
+        }
+        int tiled = 1;
+        for (uint64_t k = 0; k < len; k++) tiled &= cover[k] == 1;
+        CHECK(tiled);
+        if (rank == 0) {
+            CHECK(len == ck->len);
+            CHECK(len == ck->len && memcmp(all, ck->data, len) == 0);
+            printf("%dD: the id slices' checkpoint parts (%llu bytes, rank 0's slice %llu of %llu particles) are the gathered "
+                   "checkpoint's bytes\n",
+                   w ? sm_world_get_def(w)->dim : 0, (unsigned long long)len, (unsigned long long)n,
+                   (unsigned long long)total);
+        }
+    }
+    free(b.data);
+    free(b.cover);
+    free(all);
+    free(cover);
+    sm_id_slice_destroy(s);
+}
+
 static void run(int dim) {
     size_t ball_id = 0;
     /* One rank, two threads: the reference. */
     uint64_t ref[1] = {0};
     double ref_p[FRAMES + 1][3]; /* the one-rank run's momentum after each frame */
+    double ref_d[6] = {0};       /* its final diagnostics: particles, mass, kinetic energy, largest speed, com x, y */
     memset(ref_p, 0, sizeof ref_p);
     if (rank == 0) {
         sm_world *w = build(dim, 2, &ball_id, 0);
@@ -177,9 +246,15 @@ static void run(int dim) {
             totals(w, 0, &n, &m, ref_p[f]);
         }
         ref[0] = sm_world_id_hash(w);
+        sm_diagnostics dg;
+        sm_world_diagnostics(w, &dg);
+        const double r[6] = {(double)dg.particles, dg.total_mass, dg.kinetic_energy, dg.max_speed, dg.center_of_mass[0],
+                             dg.center_of_mass[1]};
+        memcpy(ref_d, r, sizeof r);
         sm_world_destroy(w);
     }
     MPI_Bcast(ref, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+    MPI_Bcast(ref_d, 6, MPI_DOUBLE, 0, MPI_COMM_WORLD);
     MPI_Bcast(ref_p, 3 * (FRAMES + 1), MPI_DOUBLE, 0, MPI_COMM_WORLD);
 
     sm_world *w = build(dim, 1, &ball_id, 0);
@@ -202,7 +277,10 @@ static void run(int dim) {
     CHECK(owner >= 0);
     sm_test_membuf ck = {NULL, 0, 0};
     for (int f = 1; f <= FRAMES; f++) {
-        if (f == FRAMES / 2 + 1) CHECK(sm_world_save(w, sm_test_mem_write, &ck) == SM_OK); /* collective */
+        if (f == FRAMES / 2 + 1) {
+            CHECK(sm_world_save(w, sm_test_mem_write, &ck) == SM_OK); /* collective */
+            check_slices(w, &ck);
+        }
         const sm_status st = sm_world_advance(w, f * FRAME_DT);
         CHECK(st == SM_OK);
         if (st != SM_OK) {
@@ -223,6 +301,20 @@ static void run(int dim) {
         owner = now;
     }
     const uint64_t h = sm_world_id_hash(w);
+    /* Diagnostics over the ranks (collective): the one-rank run's to the rounding of the sums'
+     * order, counts and the largest speed exactly, the same bits on every rank. */
+    sm_diagnostics dg;
+    sm_world_diagnostics(w, &dg);
+    CHECK(dg.particles == (size_t)ref_d[0]);
+    CHECK_NEAR(dg.total_mass, ref_d[1], 1e-12 * ref_d[1]);
+    CHECK_NEAR(dg.kinetic_energy, ref_d[2], 1e-12 * ref_d[2]);
+    CHECK(dg.max_speed == ref_d[3]);
+    CHECK_NEAR(dg.center_of_mass[0], ref_d[4], 1e-12);
+    CHECK_NEAR(dg.center_of_mass[1], ref_d[5], 1e-12);
+    double mine_d[2] = {dg.kinetic_energy, dg.center_of_mass[1]}, lo[2], hi[2];
+    MPI_Allreduce(mine_d, lo, 2, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(mine_d, hi, 2, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    CHECK(lo[0] == hi[0] && lo[1] == hi[1]);
     sm_dist_stats ds;
     CHECK(sm_world_dist_stats(w, &ds) == 1);
     CHECK(ds.ranks == ranks && ds.rank == rank);

@@ -676,6 +676,10 @@ SM_API uint64_t sm_world_id_hash(const sm_world *w);
  *  (sm_world_save then returns SM_ERR_IO). The embedder picks the storage: a file, memory, ... */
 typedef int (*sm_write_fn)(void *user, const void *data, size_t len);
 
+/** Receives len bytes of a checkpoint that belong at byte `offset` of the stream (a rank's share
+ *  of one written by several: sm_id_slice_save in sandmpm_mpi.h); 0 on success. */
+typedef int (*sm_pwrite_fn)(void *user, uint64_t offset, const void *data, size_t len);
+
 /** Writes the world's complete state through write: a versioned header (magic "SANDMPMC", format
  *  version, precision, dimension), the world definition, materials, colliders (definitions and
  *  their motion state), emitters (definitions, owed mass, emitted count: their whole RNG state),

@@ -76,6 +76,31 @@ typedef struct sm_dist_stats {
 /** Fills *out (collective only at sm_world_distribute; here local). 0 if w is not distributed. */
 SM_API int sm_world_dist_stats(const sm_world *w, sm_dist_stats *out);
 
+/* ---- Id slices: the whole run in id order, one contiguous piece per rank ---------------------
+ * For writing one file on several ranks (a frame, a checkpoint) without any rank holding the
+ * whole run. sm_world_id_slice (collective for a distributed world) sends every particle, with
+ * every field, to the rank whose slice of the id order holds it: rank r receives the particles at
+ * positions first .. first + n - 1 of the whole run sorted by id (sm_id_slice_first, n the slice
+ * world's particle count), about total / ranks of them. The slice's world is a copy of the run's
+ * state at that moment (clock, statistics summed over the ranks, collider poses, emitter
+ * counters) with those particles and no decomposition: read it (sm_world_particles and the other
+ * const queries), never step it; it stays valid while the run's world lives, whatever steps the
+ * run then takes. On one process the slice is the whole world in id order. SM_ERR_NOMEM (on
+ * every rank) when some rank is out of memory. */
+typedef struct sm_id_slice sm_id_slice;
+SM_API sm_status sm_world_id_slice(const sm_world *w, sm_id_slice **out);
+SM_API const sm_world *sm_id_slice_world(const sm_id_slice *s);
+SM_API uint64_t sm_id_slice_first(const sm_id_slice *s);
+SM_API uint64_t sm_id_slice_total(const sm_id_slice *s);
+/* The run's communicator (MPI_COMM_SELF on one process). */
+SM_API MPI_Comm sm_id_slice_comm(const sm_id_slice *s);
+/* This rank's parts of the checkpoint stream of the whole run at the slice's moment (the bytes
+ * sm_world_save gives): its particles' field data at their offsets, and on rank 0 every byte that
+ * is not particle data. Not collective: each rank writes its parts, the ranks' parts tile the
+ * stream. *bytes: the stream's length. SM_OK or SM_ERR_IO (write returned non-zero). */
+SM_API sm_status sm_id_slice_save(const sm_id_slice *s, sm_pwrite_fn write, void *user, uint64_t *bytes);
+SM_API void sm_id_slice_destroy(sm_id_slice *s);
+
 #ifdef __cplusplus
 }
 #endif

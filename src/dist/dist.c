@@ -6,6 +6,7 @@
  * blocks and a rank's halo is a surface. The cuts: with the blocks' particle counts c_i in Morton
  * order and N = sum c_i, rank r's range starts at the first block i whose preceding count
  * sum_{j<i} c_j reaches floor(N r / P). */
+#include <stdlib.h>
 #include <string.h>
 
 #include "dist/dist_internal.h"
@@ -149,6 +150,33 @@ int sm_dist_max_int(const sm_world *w, int v) {
     int r = v;
     MPI_Allreduce(&v, &r, 1, MPI_INT, MPI_MAX, w->dist->comm);
     return r;
+}
+
+void sm_dist_sum_n(const sm_world *w, double *v, int n) {
+    const sm_dist *d = w->dist;
+    double *all = malloc((size_t)d->size * 32 * sizeof *all);
+    double mine[32] = {0};
+    memcpy(mine, v, (size_t)n * sizeof *v);
+    if (!all) { /* no room for the rank-ordered sum: a plain reduction (its order is MPI's) */
+        MPI_Allreduce(mine, v, n, MPI_DOUBLE, MPI_SUM, d->comm);
+        return;
+    }
+    MPI_Allgather(mine, 32, MPI_DOUBLE, all, 32, MPI_DOUBLE, d->comm);
+    for (int k = 0; k < n; k++) {
+        double s = 0;
+        for (int r = 0; r < d->size; r++) s += all[32 * r + k];
+        v[k] = s;
+    }
+    free(all);
+}
+
+void sm_dist_max_n(const sm_world *w, double *v, int n) {
+    double mine[64];
+    for (int k = 0; k < n; k += 64) {
+        const int m = n - k < 64 ? n - k : 64;
+        memcpy(mine, v + k, (size_t)m * sizeof *v);
+        MPI_Allreduce(mine, v + k, m, MPI_DOUBLE, MPI_MAX, w->dist->comm);
+    }
 }
 
 int sm_dist_block_complete(const sm_world *w, uint64_t key) {

@@ -50,6 +50,11 @@ size_t sm_dist_owned(const struct sm_world *w);
 double sm_dist_max(const struct sm_world *w, double v);
 /* The largest of an int over the ranks (collective). */
 int sm_dist_max_int(const struct sm_world *w, int v);
+/* v[0..n) summed over the ranks in rank order, the same bits on every rank (collective; n <= 32;
+ * out of memory: MPI_Allreduce's order). */
+void sm_dist_sum_n(const struct sm_world *w, double *v, int n);
+/* v[0..n) replaced by their largest over the ranks (collective). */
+void sm_dist_max_n(const struct sm_world *w, double *v, int n);
 /* Whether grid block `key` is read by this rank's particles (complete). */
 int sm_dist_block_complete(const struct sm_world *w, uint64_t key);
 /* sm_world_id_hash of a distributed world (collective). */
@@ -73,6 +78,8 @@ static inline void sm_dist_adopt(struct sm_world *w, size_t first) { (void)w; (v
 static inline size_t sm_dist_owned(const struct sm_world *w) { (void)w; return 0; }
 static inline double sm_dist_max(const struct sm_world *w, double v) { (void)w; return v; }
 static inline int sm_dist_max_int(const struct sm_world *w, int v) { (void)w; return v; }
+static inline void sm_dist_sum_n(const struct sm_world *w, double *v, int n) { (void)w; (void)v; (void)n; }
+static inline void sm_dist_max_n(const struct sm_world *w, double *v, int n) { (void)w; (void)v; (void)n; }
 static inline int sm_dist_block_complete(const struct sm_world *w, uint64_t key) { (void)w; (void)key; return 1; }
 static inline uint64_t sm_dist_id_hash(const struct sm_world *w) { (void)w; return 0; }
 static inline sm_status sm_dist_save(const struct sm_world *w, sm_write_fn write, void *user) {

@@ -28,14 +28,22 @@
 
 /* ---- Writing ---------------------------------------------------------------------------- */
 
+/* Bytes in stream order: to a sequential sm_write_fn, or to offsets through an sm_pwrite_fn
+ * (an id slice's share of the whole stream, sm_world_save_slice); `at` is the stream offset of the
+ * next byte, and with `skip` set a part only moves it (a part another rank writes). */
 typedef struct writer {
     sm_write_fn fn;
+    sm_pwrite_fn pfn;
     void *user;
     sm_status st;
+    uint64_t at;
+    int skip;
 } writer;
 
 static void put(writer *o, const void *p, size_t n) {
-    if (o->st == SM_OK && n > 0 && o->fn(o->user, p, n) != 0) o->st = SM_ERR_IO;
+    if (o->st == SM_OK && n > 0 && !o->skip && (o->pfn ? o->pfn(o->user, o->at, p, n) : o->fn(o->user, p, n)) != 0)
+        o->st = SM_ERR_IO;
+    o->at += n;
 }
 static void put_u32(writer *o, uint32_t v) { put(o, &v, sizeof v); }
 static void put_u64(writer *o, uint64_t v) { put(o, &v, sizeof v); }
@@ -88,49 +96,77 @@ static void put_clock(writer *o, const sm_world *w) {
     put_u64(o, w->bins.reorders);
 }
 
-static void put_particles(writer *o, const sm_world *w) {
-    put_u64(o, w->p.n);
+/* The particle section of a stream of `total` particles, of which w holds those from index
+ * `first` on in stream order (the whole world: 0 and n). head: this writer also writes the
+ * section's own bytes (count, field names and sizes, the end marker); only the particle data
+ * otherwise. */
+static void put_particles(writer *o, const sm_world *w, uint64_t first, uint64_t total, int head) {
+    const int skip = o->skip;
+    o->skip = !head;
+    put_u64(o, total);
     put_u32(o, SM_PARTICLE_NFIELDS);
     for (int k = 0; k < SM_PARTICLE_NFIELDS; k++) {
         const sm_particle_field f = sm_particle_field_info(w->dim, k);
+        const uint64_t each = (uint64_t)f.count * f.elem_size;
         char name[CKPT_MAX_NAME] = {0};
         snprintf(name, sizeof name, "%s", f.name);
+        o->skip = !head;
         put(o, name, sizeof name);
         put_u32(o, (uint32_t)f.elem_size);
         put_u32(o, (uint32_t)f.count);
-        put(o, sm_particles_field_data(&w->p, k), w->p.n * (size_t)f.count * f.elem_size);
+        const uint64_t data = o->at;
+        o->at = data + first * each;
+        o->skip = 0;
+        put(o, sm_particles_field_data(&w->p, k), w->p.n * (size_t)each);
+        o->at = data + total * each;
     }
+    o->skip = !head;
+    put(o, "END.", 4);
+    o->skip = skip;
+}
+
+/* Everything before the particles: header, definitions, colliders, emitters, clock. */
+static void put_world(writer *o, const sm_world *w) {
+    put(o, CKPT_MAGIC, 8);
+    put_u32(o, CKPT_VERSION);
+    put_u32(o, CKPT_ENDIAN);
+    put_u32(o, (uint32_t)sizeof(sm_real));
+    put_u32(o, (uint32_t)w->dim);
+    sm_world_def def = w->def;
+    def.threads = 0;
+    put(o, &def, sizeof def);
+    put_u32(o, (uint32_t)w->nmats);
+    for (int i = 0; i < w->nmats; i++) put(o, &w->mats[i].def, sizeof w->mats[i].def);
+    put_u32(o, (uint32_t)w->ncolliders);
+    for (int i = 0; i < w->ncolliders; i++) {
+        put_collider_def(o, &w->colliders[i].def);
+        put_collider_state(o, &w->colliders[i]);
+    }
+    put_u32(o, (uint32_t)w->nemitters);
+    for (int i = 0; i < w->nemitters; i++) {
+        sm_emitter_def e = w->emitters[i].def;
+        e.shape.mesh = NULL; /* a pointer: not state */
+        put(o, &e, sizeof e);
+        put_f64(o, w->emitters[i].owed);
+        put_u64(o, w->emitters[i].emitted);
+    }
+    put_clock(o, w);
 }
 
 sm_status sm_world_save(const sm_world *w, sm_write_fn write, void *user) {
     if (w->dist) return sm_dist_save(w, write, user); /* gathered on rank 0 (dist.c) */
-    writer o = {write, user, SM_OK};
-    put(&o, CKPT_MAGIC, 8);
-    put_u32(&o, CKPT_VERSION);
-    put_u32(&o, CKPT_ENDIAN);
-    put_u32(&o, (uint32_t)sizeof(sm_real));
-    put_u32(&o, (uint32_t)w->dim);
-    sm_world_def def = w->def;
-    def.threads = 0;
-    put(&o, &def, sizeof def);
-    put_u32(&o, (uint32_t)w->nmats);
-    for (int i = 0; i < w->nmats; i++) put(&o, &w->mats[i].def, sizeof w->mats[i].def);
-    put_u32(&o, (uint32_t)w->ncolliders);
-    for (int i = 0; i < w->ncolliders; i++) {
-        put_collider_def(&o, &w->colliders[i].def);
-        put_collider_state(&o, &w->colliders[i]);
-    }
-    put_u32(&o, (uint32_t)w->nemitters);
-    for (int i = 0; i < w->nemitters; i++) {
-        sm_emitter_def e = w->emitters[i].def;
-        e.shape.mesh = NULL; /* a pointer: not state */
-        put(&o, &e, sizeof e);
-        put_f64(&o, w->emitters[i].owed);
-        put_u64(&o, w->emitters[i].emitted);
-    }
-    put_clock(&o, w);
-    put_particles(&o, w);
-    put(&o, "END.", 4);
+    writer o = {write, NULL, user, SM_OK, 0, 0};
+    put_world(&o, w);
+    put_particles(&o, w, 0, w->p.n, 1);
+    return o.st;
+}
+
+sm_status sm_world_save_part(const sm_world *w, uint64_t first, uint64_t total, int head, sm_pwrite_fn write, void *user,
+                             uint64_t *bytes) {
+    writer o = {NULL, write, user, SM_OK, 0, !head};
+    put_world(&o, w);
+    put_particles(&o, w, first, total, head);
+    *bytes = o.at;
     return o.st;
 }
 

@@ -71,6 +71,27 @@ static double elastic_energy(const sm_world *w) {
     return e;
 }
 
+/* A distributed world's totals over the ranks (collective): the sums of each rank's partial sums
+ * in rank order (the same bits on every rank; within rounding of one process's sums, whose order
+ * is its storage order), the largest speed and stage times, the particle and event counts. */
+static void over_ranks(const sm_world *w, sm_diagnostics *o, double com[3], double *vmax2) {
+    double v[14] = {o->total_mass, o->momentum[0], o->momentum[1], o->momentum[2], o->angular_momentum[0],
+                    o->angular_momentum[1], o->angular_momentum[2], o->kinetic_energy, com[0], com[1], com[2],
+                    o->elastic_energy, (double)o->particles, 0};
+    sm_dist_sum_n(w, v, 13);
+    o->total_mass = v[0];
+    for (int a = 0; a < 3; a++) o->momentum[a] = v[1 + a], o->angular_momentum[a] = v[4 + a], com[a] = v[8 + a];
+    o->kinetic_energy = v[7];
+    o->elastic_energy = v[11];
+    o->particles = (size_t)v[12]; /* exact below 2^53 */
+    *vmax2 = sm_dist_max(w, *vmax2);
+    sm_dist_max_n(w, o->stage_seconds, SM_STAGE_COUNT);
+    double events[2] = {(double)w->clamped, (double)w->projected};
+    sm_dist_sum_n(w, events, 2);
+    o->clamped_particles = (uint64_t)events[0];
+    o->projected_particles = (uint64_t)events[1];
+}
+
 void sm_world_diagnostics(const sm_world *w, sm_diagnostics *o) {
     memset(o, 0, sizeof *o);
     const int d = w->dim;
@@ -89,19 +110,20 @@ void sm_world_diagnostics(const sm_world *w, sm_diagnostics *o) {
         if (s > vmax2) vmax2 = s;
     }
     o->kinetic_energy = ke;
+    o->elastic_energy = P->n ? elastic_energy(w) : 0;
+    for (int s = 0; s < SM_STAGE_COUNT; s++) o->stage_seconds[s] = w->stage_seconds[s];
+    o->clamped_particles = w->clamped;
+    o->projected_particles = w->projected;
+    if (w->dist) over_ranks(w, o, com, &vmax2);
     o->max_speed = sqrt(vmax2);
     for (int a = 0; a < 3; a++) o->center_of_mass[a] = o->total_mass > 0 ? com[a] / o->total_mass : 0;
-    o->elastic_energy = P->n ? elastic_energy(w) : 0;
     o->steps = w->steps;
     o->time = w->time;
     o->last_dt = w->last_dt;
     o->min_dt = isfinite(w->min_dt) ? w->min_dt : 0;
     o->max_dt = w->max_dt;
-    for (int s = 0; s < SM_STAGE_COUNT; s++) o->stage_seconds[s] = w->stage_seconds[s];
     o->threads = w->governed ? sm_governor_threads(&w->gov) : w->threads;
     o->thread_switches = w->gov.switches;
-    o->clamped_particles = w->clamped;
-    o->projected_particles = w->projected;
     o->newton_iterations = w->newton.newton_total;
     o->gmres_iterations = w->newton.gmres_total;
     o->last_newton_iterations = w->newton.last_iterations;

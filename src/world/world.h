@@ -102,6 +102,13 @@ sm_status sm_world_fail(sm_world *w, sm_status status, const char *fmt, ...)
 sm_status sm_world_run_emitters(sm_world *w, double t0, double t1);
 /* Room for n particles in all (max_particles and the id range checked; particle_api.c). */
 sm_status sm_world_reserve_particles(sm_world *w, size_t n);
+/* sm_world_save's stream of a world of `total` particles of which w's are those from index
+ * `first` on (in the stream's particle order), written through write at their offsets
+ * (checkpoint.c): with head set also every byte that is not particle data, else only w's particle
+ * data. *bytes: the whole stream's length. The ranks' id slices together write the stream of the
+ * whole run (dist/slices.c). */
+sm_status sm_world_save_part(const sm_world *w, uint64_t first, uint64_t total, int head, sm_pwrite_fn write, void *user,
+                             uint64_t *bytes);
 
 /* Mass of particle p. */
 static inline sm_real sm_particle_mass(const sm_material_rt *mats, const sm_particles *P, size_t p) {

@@ -63,8 +63,12 @@ void sm_run_outputs_choose(sm_run_outputs *o, const sm_run_request *r, const sm_
     o->sinks[o->nsinks++] = sm_sink_manifest(&o->camera);
     if (r->render) o->sinks[o->nsinks++] = sm_sink_png(&o->png);
     if (st->out_csv) o->sinks[o->nsinks++] = sm_sink_csv();
-    if (o->ckpt.every > 0) o->sinks[o->nsinks++] = sm_sink_checkpoint(&o->ckpt);
     o->manifest.written = (st->out_ply || r->render ? 1u << SM_FRAME_PLY : 0) | (st->out_vtk ? 1u << SM_FRAME_VTP : 0) |
                           (r->render ? 1u << SM_FRAME_PNG : 0);
+    /* The run manifest records a frame before its checkpoint exists: a run killed between the two
+     * resumes from the checkpoint before, with the manifest listing every frame up to it. (In
+     * the other order, a kill just after the checkpoint left the manifest a frame behind it, and
+     * the resume listed only the frames after the checkpoint: test_checkpoints.sh caught it.) */
     o->sinks[o->nsinks++] = sm_sink_run_manifest(&o->manifest);
+    if (o->ckpt.every > 0) o->sinks[o->nsinks++] = sm_sink_checkpoint(&o->ckpt);
 }

@@ -13,7 +13,7 @@
 #include "app/checkpoint.h"
 #include "app/io/files.h"
 
-#define TRAILER_BYTES (4 + 8 + 8 + 4 + 4)
+#define TRAILER_BYTES SM_CKPT_TRAILER_BYTES
 
 typedef struct membuf {
     unsigned char *data;
@@ -227,14 +227,15 @@ sm_status sm_checkpoint_read(const char *path, unsigned char **stream, size_t *l
 }
 
 /* The sink keeps the last frame's state in memory (one sm_world_save per frame: a copy of the
- * particle arrays), so that a numerical failure in the next frame, or a stop in the middle of it
- * (app/run.h: stop_at_step), can still write it. */
+ * particle arrays; across ranks the run's id slice of that frame), so that a numerical failure in the
+ * next frame, or a stop (in the middle of it, app/run.h: stop_at_step, or between frames), can
+ * still write it. */
 typedef struct ckpt_state {
-    membuf last;      /* the stream of frame last_frame */
-    int last_frame;   /* -1: none */
-    double last_time; /* the world's time at last_frame */
-    const char *out;  /* the output folder */
-    const sm_world *w;
+    membuf last;        /* the stream of frame last_frame (one process) */
+    const sm_part_io *io; /* across ranks: how the parts are written (NULL on one process); its id
+                             slice, the run's own, stays that of last_frame until the next frame */
+    int last_frame;     /* -1: none (the same on every rank) */
+    const char *out;    /* the output folder */
 } ckpt_state;
 
 static int count_write(void *user, const void *data, size_t n) {
@@ -266,34 +267,57 @@ static sm_status ckpt_begin(sm_sink *s, const sm_run_info *run, char *err, size_
     }
     c->last_frame = -1;
     c->out = run->out_dir;
-    c->w = run->w;
     s->state = c;
     return SM_OK;
+}
+
+/* Whether frame has its checkpoint by the schedule. */
+static int scheduled(const sm_checkpoint_config *c, int frame) { return c->every > 0 && frame > 0 && frame % c->every == 0; }
+
+/* The id slice as frame's checkpoint, across ranks (collective): rank 0 makes the folder and
+ * prunes. */
+static sm_status write_parts(const sm_checkpoint_config *c, ckpt_state *cs, int frame, char *err, size_t errlen) {
+    char dir[SM_PATH_MAX], path[SM_PATH_MAX];
+    sm_status st = cs->io->writer ? checkpoint_path(cs->out, frame, dir, sizeof dir, path, sizeof path, err, errlen)
+                                  : checkpoint_name(cs->out, frame, dir, sizeof dir, path, sizeof path, err, errlen);
+    st = cs->io->agree(cs->io->ctx, st, err, errlen);
+    if (st == SM_OK) st = sm_ckpt_parts_write(cs->io, path, frame, c->scene_hash, err, errlen);
+    if (st == SM_OK && cs->io->writer) prune(dir, c->keep);
+    return st;
 }
 
 static sm_status ckpt_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t errlen) {
     const sm_checkpoint_config *c = s->config;
     ckpt_state *cs = s->state;
+    if (fr->part) { /* across ranks: written from the id slice, which the run keeps */
+        cs->io = fr->part;
+        cs->last_frame = fr->frame;
+        return scheduled(c, fr->frame) ? write_parts(c, cs, fr->frame, err, errlen) : SM_OK;
+    }
     cs->last.len = 0;
     cs->last_frame = save_exactly(fr->w, &cs->last) == SM_OK ? fr->frame : -1;
-    cs->last_time = sm_world_time(fr->w);
-    if (c->every <= 0 || fr->frame == 0 || fr->frame % c->every != 0) return SM_OK;
+    if (!scheduled(c, fr->frame)) return SM_OK;
     char path[SM_PATH_MAX];
     return sm_checkpoint_write(fr->out_dir, fr->w, fr->frame, c->scene_hash, c->keep, path, sizeof path, err, errlen);
 }
 
-/* After a numerical failure, or a run stopped in the middle of a frame (it ended well, past the
- * last frame's time): the last good frame's state written as its checkpoint. */
+/* After a numerical failure, or a stop (in the middle of a frame or between frames): the last good
+ * frame's state written as its checkpoint, unless it has one. The same decision on every rank
+ * (the run's status, the stop and last_frame are agreed). */
 static sm_status ckpt_end(sm_sink *s, sm_status run_status, char *err, size_t errlen) {
     const sm_checkpoint_config *c = s->config;
     ckpt_state *cs = s->state;
     sm_status st = SM_OK;
-    const int mid_frame_stop = run_status == SM_OK && sm_world_time(cs->w) > cs->last_time;
-    if ((run_status == SM_ERR_NUMERICAL || mid_frame_stop) && cs->last_frame >= 0) { /* the saved bytes, as they are */
-        char dir[SM_PATH_MAX], path[SM_PATH_MAX];
-        st = checkpoint_path(cs->out, cs->last_frame, dir, sizeof dir, path, sizeof path, err, errlen);
-        if (st == SM_OK) st = write_durably(dir, path, NULL, &cs->last, cs->last_frame, c->scene_hash, err, errlen);
-        if (st == SM_OK) prune(dir, c->keep);
+    if ((run_status == SM_ERR_NUMERICAL || (run_status == SM_OK && s->stopped)) && cs->last_frame >= 0 &&
+        !scheduled(c, cs->last_frame)) {
+        if (cs->io) {
+            st = write_parts(c, cs, cs->last_frame, err, errlen);
+        } else { /* the saved bytes, as they are */
+            char dir[SM_PATH_MAX], path[SM_PATH_MAX];
+            st = checkpoint_path(cs->out, cs->last_frame, dir, sizeof dir, path, sizeof path, err, errlen);
+            if (st == SM_OK) st = write_durably(dir, path, NULL, &cs->last, cs->last_frame, c->scene_hash, err, errlen);
+            if (st == SM_OK) prune(dir, c->keep);
+        }
     }
     free(cs->last.data);
     free(cs);
@@ -302,6 +326,6 @@ static sm_status ckpt_end(sm_sink *s, sm_status run_status, char *err, size_t er
 }
 
 sm_sink sm_sink_checkpoint(const sm_checkpoint_config *config) {
-    sm_sink s = {"checkpoint", config, NULL, ckpt_begin, ckpt_frame, ckpt_end};
+    sm_sink s = {"checkpoint", config, NULL, ckpt_begin, ckpt_frame, ckpt_end, SM_SINK_PART, 0};
     return s;
 }

@@ -30,6 +30,13 @@ sm_status sm_checkpoint_find(const char *out_dir, int frame, char *path, size_t 
 sm_status sm_checkpoint_write(const char *out_dir, const sm_world *w, int frame, uint64_t scene_hash, int keep, char *path,
                               size_t pathlen, char *err, size_t errlen);
 
+/* ---- A checkpoint across MPI ranks (checkpoint_parts.c): every rank its parts ----------------- */
+#define SM_CKPT_TRAILER_BYTES (4 + 8 + 8 + 4 + 4)
+/* frame's checkpoint file path (its folder exists) written by every rank at once from its id slice
+ * (collective): the same bytes sm_checkpoint_write of the gathered world writes. */
+sm_status sm_ckpt_parts_write(const sm_part_io *io, const char *path, int frame, uint64_t scene_hash, char *err,
+                              size_t errlen);
+
 /* Checks a checkpoint file's trailer and checksum; on SM_OK *stream and *len are the library stream
  * (malloc'd, free it) and *frame, *scene_hash its trailer's. SM_ERR_INVALID / SM_ERR_IO with err. */
 sm_status sm_checkpoint_read(const char *path, unsigned char **stream, size_t *len, int *frame, uint64_t *scene_hash,

@@ -15,6 +15,7 @@
 #include <signal.h>
 #include <stddef.h>
 
+#include "app/io/part_file.h"
 #include "sandmpm/sandmpm.h"
 
 /* What every sink knows of the run. */
@@ -25,6 +26,8 @@ typedef struct sm_run_info {
     double fps;          /* frames per second of simulated time */
     int first_frame;     /* the first frame the loop hands to the sinks: 0, or after a resume from a
                             checkpoint of frame F, F + 1 (the world is then at F's time) */
+    const sm_diagnostics *d; /* the world's diagnostics as the loop starts (across ranks: all of them) */
+    int writer;          /* 1 on the rank that writes whole files (one process: 1) */
 } sm_run_info;
 
 /* One frame as the sinks see it. */
@@ -34,7 +37,19 @@ typedef struct sm_run_frame {
     const sm_world *w;        /* the world at the frame's time */
     const sm_diagnostics *d;  /* its diagnostics (min/max dt: the steps since the previous frame) */
     double start_wall;        /* monotonic wall clock (sm_run_wall) when the loop started */
+    const sm_part_io *part;   /* for a part sink across ranks: how to write this rank's parts of a
+                                 file, w being this rank's id slice; NULL on one process (and for
+                                 the other scopes), w the whole world */
 } sm_run_frame;
+
+/* Which world a sink needs across MPI ranks (on one process every sink runs with the world):
+ *   WHOLE  runs on the writer rank with every particle gathered there (PNG renders, a caller's
+ *          frame hook): the default, and the only scope that holds the whole run on one rank
+ *   STATE  runs on the writer rank with its own part of the world: it reads only what every rank
+ *          holds alike (the clock, colliders, definitions) and the diagnostics in sm_run_frame
+ *   PART   runs on every rank with its slice of the run in id order (sm_run_frame.part), and
+ *          writes its parts of one file (PLY, VTP, checkpoints) */
+typedef enum sm_sink_scope { SM_SINK_WHOLE = 0, SM_SINK_STATE = 1, SM_SINK_PART = 2 } sm_sink_scope;
 
 typedef struct sm_sink sm_sink;
 struct sm_sink {
@@ -44,11 +59,14 @@ struct sm_sink {
     sm_status (*begin)(sm_sink *s, const sm_run_info *run, char *err, size_t errlen);
     sm_status (*frame)(sm_sink *s, const sm_run_frame *fr, char *err, size_t errlen);
     sm_status (*end)(sm_sink *s, sm_status run_status, char *err, size_t errlen);
+    sm_sink_scope scope;
+    int stopped; /* set by the loop before end: 1 if the stop flag ended the run early */
 };
 
 /* A run across MPI ranks (cli/ranks.c): every rank runs the frame loop and advances its part of
- * the world; the sinks run on the writing rank only, on the whole world gathered there. NULL in
- * sm_run_config.ranks for a run on one process. Each call is collective (every rank, in step). */
+ * the world; the sinks run where their scope says. The whole world is gathered on the writer only
+ * at frames when some WHOLE sink runs. NULL in sm_run_config.ranks for a run on one process. Each
+ * call is collective (every rank, in step). */
 typedef struct sm_run_ranks {
     void *ctx;
     int writer; /* 1 on the rank that runs the sinks (rank 0) */
@@ -59,6 +77,10 @@ typedef struct sm_run_ranks {
     sm_status (*agree)(void *ctx, sm_status st, char *err, size_t errlen);
     /* Non-zero on every rank if flag is non-zero on any. */
     int (*any)(void *ctx, int flag);
+    /* This rank's id slice of w (valid until the next call) and how its part sinks write; a
+     * failure's status with its message, on every rank. */
+    sm_status (*slice)(void *ctx, const sm_world *w, const sm_world **slice, const sm_part_io **part, char *err,
+                       size_t errlen);
 } sm_run_ranks;
 
 /* The run's settings beyond the sinks. */

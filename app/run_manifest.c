@@ -283,5 +283,6 @@ static sm_status rm_end(sm_sink *s, sm_status run_status, char *err, size_t errl
 }
 
 sm_sink sm_sink_run_manifest(const sm_run_manifest_config *config) {
-    return (sm_sink){"run manifest", config, NULL, rm_begin, rm_frame, rm_end};
+    sm_sink s = {"run manifest", config, NULL, rm_begin, rm_frame, rm_end, SM_SINK_STATE, 0};
+    return s;
 }

@@ -70,5 +70,5 @@ void sm_run_outputs_choose(sm_run_outputs *o, const sm_run_request *r, const sm_
      * the other order, a kill just after the checkpoint left the manifest a frame behind it, and
      * the resume listed only the frames after the checkpoint: test_checkpoints.sh caught it.) */
     o->sinks[o->nsinks++] = sm_sink_run_manifest(&o->manifest);
-    if (o->ckpt.every > 0) o->sinks[o->nsinks++] = sm_sink_checkpoint(&o->ckpt);
+    if (o->ckpt.every > 0 || r->keep_last) o->sinks[o->nsinks++] = sm_sink_checkpoint(&o->ckpt);
 }

@@ -32,6 +32,8 @@ typedef struct sm_run_request {
     int threads;          /* the renderer's threads, 0 = OpenMP's default */
     int checkpoint_every; /* frames, 0: none (sm_run_checkpoint_every) */
     int keep;             /* checkpoints kept, >= 1 */
+    int keep_last;        /* 1: the checkpoint sink even without checkpoints (checkpoint_every 0), to
+                             write the last frame's state when a stop or a failure ends the run */
 } sm_run_request;
 
 /* Everything the sinks are configured with; alive through the run (the sinks point into it). */

@@ -97,7 +97,7 @@ sm_status sm_scene_run(sm_scene *sc, const sm_scene_run_opts *o, int *frames_wri
     sm_run_outputs_choose(&outs, &r, st, &start);
     volatile sig_atomic_t stop = 0;
     frame_hook hook = {o->on_frame, o->ctx, &stop};
-    if (o->on_frame) outs.sinks[outs.nsinks++] = (sm_sink){"on_frame", &hook, NULL, NULL, hook_frame, NULL};
+    if (o->on_frame) outs.sinks[outs.nsinks++] = (sm_sink){"on_frame", &hook, NULL, NULL, hook_frame, NULL, SM_SINK_WHOLE, 0};
     sm_run_config cfg;
     memset(&cfg, 0, sizeof cfg);
     cfg.info.out_dir = o->out;

@@ -106,10 +106,15 @@ static sm_status ply_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t
     char path[SM_PATH_MAX];
     sm_status st = frame_path(path, sizeof path, fr->out_dir, fr->frame, "ply", err, errlen);
     const int *z_up = s->config;
-    return st == SM_OK ? sm_write_ply(fr->w, path, z_up && *z_up, err, errlen) : st;
+    if (st != SM_OK) return st; /* the same on every rank: a name too long */
+    return fr->part ? sm_write_ply_part(fr->w, fr->part, path, z_up && *z_up, err, errlen)
+                    : sm_write_ply(fr->w, path, z_up && *z_up, err, errlen);
 }
 
-sm_sink sm_sink_ply(const int *z_up) { return (sm_sink){"ply", z_up, NULL, NULL, ply_frame, NULL}; }
+sm_sink sm_sink_ply(const int *z_up) {
+    sm_sink s = {"ply", z_up, NULL, NULL, ply_frame, NULL, SM_SINK_PART, 0};
+    return s;
+}
 
 /* ------------------------------------------------------------------------------------------ */
 /* vtk                                                                                          */
@@ -156,14 +161,19 @@ static sm_status vtk_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_t
     vtk_state *v = s->state;
     char name[48], path[SM_PATH_MAX];
     snprintf(name, sizeof name, "frame_%04d.vtp", fr->frame);
+    sm_status st = SM_OK;
     if (!vtk_grow(v) || !(v->names[v->count] = strdup(name))) {
         snprintf(err, errlen, "out of memory");
-        return SM_ERR_NOMEM;
+        st = SM_ERR_NOMEM;
+    } else {
+        v->times[v->count++] = fr->d->time;
+        st = join(path, sizeof path, fr->out_dir, name, err, errlen);
     }
-    v->times[v->count++] = fr->d->time;
-    sm_status st = join(path, sizeof path, fr->out_dir, name, err, errlen);
     const int *z_up = s->config;
-    if (st == SM_OK) st = sm_write_vtp(fr->w, path, z_up && *z_up, err, errlen);
+    if (fr->part) st = fr->part->agree(fr->part->ctx, st, err, errlen); /* every rank writes, or none */
+    if (st == SM_OK && fr->part) st = sm_write_vtp_part(fr->w, fr->part, path, z_up && *z_up, err, errlen);
+    else if (st == SM_OK) st = sm_write_vtp(fr->w, path, z_up && *z_up, err, errlen);
+    if (fr->part && !fr->part->writer) return st; /* the writer lists the frames */
     if (st == SM_OK) st = join(path, sizeof path, fr->out_dir, "frames.pvd", err, errlen);
     if (st == SM_OK) st = sm_write_pvd(path, (const char *const *)v->names, v->times, v->count, err, errlen);
     return st;
@@ -178,7 +188,10 @@ static sm_status vtk_end(sm_sink *s, sm_status run_status, char *err, size_t err
     return drop_state(s, SM_OK);
 }
 
-sm_sink sm_sink_vtk(const int *z_up) { return (sm_sink){"vtk", z_up, NULL, vtk_begin, vtk_frame, vtk_end}; }
+sm_sink sm_sink_vtk(const int *z_up) {
+    sm_sink s = {"vtk", z_up, NULL, vtk_begin, vtk_frame, vtk_end, SM_SINK_PART, 0};
+    return s;
+}
 
 /* ------------------------------------------------------------------------------------------ */
 /* manifest                                                                                     */
@@ -228,7 +241,8 @@ static sm_status manifest_end(sm_sink *s, sm_status run_status, char *err, size_
 }
 
 sm_sink sm_sink_manifest(const sm_manifest_camera *camera) {
-    return (sm_sink){"manifest", camera, NULL, manifest_begin, manifest_frame, manifest_end};
+    sm_sink s = {"manifest", camera, NULL, manifest_begin, manifest_frame, manifest_end, SM_SINK_STATE, 0}; /* the definitions and the colliders' poses */
+    return s;
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -266,7 +280,7 @@ static sm_status png_end(sm_sink *s, sm_status run_status, char *err, size_t err
 }
 
 sm_sink sm_sink_png(const sm_png_sink_config *config) {
-    return (sm_sink){"png", config, NULL, png_begin, png_frame, png_end};
+    return (sm_sink){"png", config, NULL, png_begin, png_frame, png_end, SM_SINK_WHOLE, 0};
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -282,7 +296,7 @@ typedef struct csv_state {
 static sm_status csv_begin(sm_sink *s, const sm_run_info *run, char *err, size_t errlen) {
     csv_state *c = new_state(sizeof *c, err, errlen);
     if (!c) return SM_ERR_NOMEM;
-    sm_world_diagnostics(run->w, &c->prev); /* frame 0's, or the resumed checkpoint's */
+    c->prev = *run->d; /* frame 0's, or the resumed checkpoint's */
     char path[SM_PATH_MAX], line[SM_CSV_LINE_MAX];
     sm_status st = join(path, sizeof path, run->out_dir, "diagnostics.csv", err, errlen);
     char *rows = st == SM_OK ? rows_before(path, run->first_frame) : NULL;
@@ -316,4 +330,7 @@ static sm_status csv_end(sm_sink *s, sm_status run_status, char *err, size_t err
     return drop_state(s, sm_stream_close(&c->f, run_status != SM_OK && c->rows == 0, err, errlen));
 }
 
-sm_sink sm_sink_csv(void) { return (sm_sink){"csv", NULL, NULL, csv_begin, csv_frame, csv_end}; }
+sm_sink sm_sink_csv(void) {
+    sm_sink s = {"csv", NULL, NULL, csv_begin, csv_frame, csv_end, SM_SINK_STATE, 0};
+    return s;
+}

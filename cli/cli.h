@@ -192,10 +192,18 @@ typedef struct cli_ranks {
     sm_run_ranks hooks;           /* for sm_run_config.ranks when count > 1 */
     sm_world *view;               /* rank 0: the whole world at the last frame gathered (the
                                      caller's, built like the run's world) */
-    unsigned long long *shares;   /* rank 0: each rank's particles at the last frame gathered */
+    unsigned long long *shares;   /* rank 0: each rank's particles at the last frame gathered or sliced */
     unsigned char *stream;        /* the gathered checkpoint stream's buffer */
     size_t stream_cap;
+    struct sm_id_slice *slice;    /* this rank's id slice of the last frame (ranks_files.c) */
+    sm_part_io part;              /* how the part sinks write with it */
 } cli_ranks;
+/* ranks_files.c, with MPI: the hooks' agreement (the worst status, the first failing rank's
+ * message), the id slice hook (which counts the shares too), and the shares' count on rank 0. */
+sm_status cli_ranks_agree(void *ctx, sm_status st, char *err, size_t errlen);
+sm_status cli_ranks_slice(void *ctx, const sm_world *w, const sm_world **slice, const sm_part_io **part, char *err,
+                          size_t errlen);
+void cli_ranks_count_shares(cli_ranks *r, const sm_world *w);
 /* With several ranks: w distributed over them (collective: sm_world_distribute_share when
  * cli_ranks_build gave a seeding, else sm_world_distribute) and the hooks set; view (rank 0;
  * NULL elsewhere): a world built like w, which each frame is gathered into. SM_OK, or the

@@ -113,6 +113,7 @@ static sm_run_request run_request(const run_args *a, uint64_t hash, int nframes)
     r.video = a->video;
     r.threads = a->so.threads;
     r.checkpoint_every = a->ckpt_every;
+    r.keep_last = cli_ranks_count() > 1; /* across ranks no rank holds the world to write at a stop */
     r.keep = a->keep;
     return r;
 }
@@ -181,8 +182,8 @@ static void say_what_is_complete(const char *out, int frames_written, int nframe
 }
 
 /* Whether a signal stops the run at the next step (app/run.h): when the last frame is kept
- * elsewhere than in the world: across ranks in rank 0's view, on one process in the checkpoint
- * sink's copy (--checkpoint-every > 0). Else it stops after the frame in progress. */
+ * elsewhere than in the world: in the checkpoint sink's copy (across ranks always, each rank its
+ * parts; on one process with --checkpoint-every > 0). Else it stops after the frame in progress. */
 static int stop_at_step(const run_args *a, const cli_ranks *ranks) { return ranks->count > 1 || a->ckpt_every > 0; }
 
 /* The frame loop into out; the message of a failure or a stop printed. *stopped: the signal that
@@ -219,15 +220,14 @@ static sm_status run_frames(const run_args *a, sm_scene *sc, const char *out, in
     if (*stopped)
         fprintf(stderr, "sandmpm run: stopped by %s after frame %d (t = %.6g s)\n", cli_signal_name(*stopped),
                 res.frames_written - 1, (res.frames_written - 1) / st->fps);
-    sm_world *whole = ranks->count > 1 ? ranks->view : cfg.info.w; /* NULL on ranks other than 0 */
-    if (*stopped && res.frames_written > 0 && whole) {
+    if (*stopped && res.frames_written > 0 && ranks->rank == 0) {
         char path[SM_PATH_MAX], e2[SM_MSG_MAX];
         const int frame = res.frames_written - 1;
         sm_status cs;
-        if (sm_world_time(whole) > frame / st->fps) /* stopped inside a frame: the sink wrote the last one */
+        if (req.keep_last || o.ckpt.every > 0) /* the checkpoint sink wrote the last frame's state */
             cs = sm_checkpoint_find(out, frame, path, sizeof path, e2, sizeof e2);
-        else
-            cs = sm_checkpoint_write(out, whole, frame, hash, a->keep, path, sizeof path, e2, sizeof e2);
+        else /* one process, stopped between frames: the world is at the frame's time */
+            cs = sm_checkpoint_write(out, cfg.info.w, frame, hash, a->keep, path, sizeof path, e2, sizeof e2);
         char launcher[32] = "";
         if (ranks->count > 1) snprintf(launcher, sizeof launcher, "mpirun -np %d ", ranks->count);
         if (cs == SM_OK)

@@ -29,7 +29,7 @@ static sm_status progress_begin(sm_sink *s, const sm_run_info *run, char *err, s
     p->first_frame = run->first_frame;
     p->last_frame = run->first_frame - 1;
     s->state = p;
-    sm_world_diagnostics(run->w, &p->start);
+    p->start = *run->d;
     p->prev = p->start;
     if (c->quiet) return SM_OK;
     fprintf(stderr, "sandmpm: %s (%s), %zu particles, %d frames at %g fps", c->scene_label, c->quality,
@@ -103,5 +103,6 @@ static sm_status progress_end(sm_sink *s, sm_status run_status, char *err, size_
 }
 
 sm_sink cli_progress_sink(const cli_progress_config *config) {
-    return (sm_sink){"progress", config, NULL, progress_begin, progress_frame, progress_end};
+    sm_sink s = {"progress", config, NULL, progress_begin, progress_frame, progress_end, SM_SINK_STATE, 0};
+    return s;
 }

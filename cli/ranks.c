@@ -124,10 +124,7 @@ static sm_status gather(void *ctx, const sm_world *w, sm_world **view, char *err
     sm_status st = sm_world_save(w, mem_write, &m);
     r->stream = m.data;
     r->stream_cap = m.cap;
-    sm_dist_stats ds;
-    sm_world_dist_stats(w, &ds);
-    unsigned long long mine = ds.particles;
-    MPI_Gather(&mine, 1, MPI_UNSIGNED_LONG_LONG, r->shares, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+    cli_ranks_count_shares(r, w);
     if (st != SM_OK) snprintf(err, errlen, "gathering the ranks' particles on rank 0 failed (out of memory)");
     else if (r->rank == 0 && (st = sm_world_restore(r->view, m.data, m.len)) != SM_OK)
         snprintf(err, errlen, "the gathered world: %s", sm_world_errmsg(r->view));
@@ -136,11 +133,11 @@ static sm_status gather(void *ctx, const sm_world *w, sm_world **view, char *err
     return st;
 }
 
-static sm_status agree(void *ctx, sm_status st, char *err, size_t errlen) {
-    (void)ctx;
-    sm_status all = cli_ranks_share_status(st);
-    if (all != SM_OK && st == SM_OK) snprintf(err, errlen, "rank 0 failed");
-    return all;
+void cli_ranks_count_shares(cli_ranks *r, const sm_world *w) {
+    sm_dist_stats ds;
+    sm_world_dist_stats(w, &ds);
+    unsigned long long mine = ds.particles;
+    MPI_Gather(&mine, 1, MPI_UNSIGNED_LONG_LONG, r->shares, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
 }
 
 static int any(void *ctx, int flag) {
@@ -204,11 +201,12 @@ sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, cli_seeding 
         snprintf(err, errlen, "%s", sm_world_errmsg(w));
     else if (st != SM_OK)
         snprintf(err, errlen, "out of memory");
-    r->hooks = (sm_run_ranks){r, r->rank == 0, gather, agree, any};
+    r->hooks = (sm_run_ranks){r, r->rank == 0, gather, cli_ranks_agree, any, cli_ranks_slice};
     return st;
 }
 
 void cli_ranks_close(cli_ranks *r) {
+    sm_id_slice_destroy(r->slice);
     free(r->stream);
     free(r->shares);
     memset(r, 0, sizeof *r);

@@ -87,4 +87,7 @@ static sm_status note_frame(sm_sink *s, const sm_run_frame *fr, char *err, size_
     return SM_OK;
 }
 
-sm_sink cli_interrupt_note_sink(void) { return (sm_sink){"note", NULL, NULL, note_begin, note_frame, NULL}; }
+sm_sink cli_interrupt_note_sink(void) {
+    sm_sink s = {"note", NULL, NULL, note_begin, note_frame, NULL, SM_SINK_STATE, 0};
+    return s;
+}

@@ -5,6 +5,7 @@
 #include <stddef.h>
 
 #include "app/frame.h"
+#include "app/io/part_file.h"
 #include "sandmpm/sandmpm.h"
 
 /* Reads a PLY frame. Properties are found by name in the header, in any order, with any extra
@@ -26,5 +27,10 @@ sm_status sm_ply_read(const char *path, sm_frame *f, char *err, size_t errlen);
  * and velocities z-up (app/io/fields.h, sm_out_to_z_up). Returns SM_OK, SM_ERR_NOMEM or SM_ERR_IO
  * with a message in err. */
 sm_status sm_write_ply(const sm_world *w, const char *path, int z_up, char *err, size_t errlen);
+
+/* The same file written by every rank of a run at once (app/io/part_file.h), each its slice's
+ * records at their places: the bytes sm_write_ply of the whole run in id order gives. Collective. */
+sm_status sm_write_ply_part(const sm_world *slice, const sm_part_io *io, const char *path, int z_up, char *err,
+                            size_t errlen);
 
 #endif

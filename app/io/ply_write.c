@@ -36,6 +36,24 @@ static void put_record(unsigned char *rec, const sm_out_particle *r) {
     put_u32(rec + 42, r->id);
 }
 
+/* The header of a frame of n particles into buf (at most len bytes); its length, or 0 if it does
+ * not fit. */
+static size_t ply_header(char *buf, size_t len, const sm_world *w, int dim, int z_up, uint64_t n) {
+    const sm_world_def *def = sm_world_get_def(w);
+    int k = snprintf(buf, len,
+                     "ply\nformat binary_little_endian 1.0\ncomment sandmpm %s\ncomment dim %d\n"
+                     "comment domain %.9g %.9g %.9g %.9g %.9g %.9g\ncomment up %c\nelement vertex %llu\n"
+                     "property float x\nproperty float y\nproperty float z\n"
+                     "property float vx\nproperty float vy\nproperty float vz\n"
+                     "property ushort material\nproperty float q\nproperty float friction_angle\nproperty float Je\n"
+                     "property float volume\nproperty uint id\nend_header\n",
+                     sm_version(), dim, def->domain_min[0], def->domain_min[1], def->domain_min[2], def->domain_max[0],
+                     def->domain_max[1], def->domain_max[2], z_up ? 'z' : 'y', (unsigned long long)n);
+    return k > 0 && (size_t)k < len ? (size_t)k : 0;
+}
+
+#define PLY_HEADER_MAX 2048
+
 sm_status sm_write_ply(const sm_world *w, const char *path, int z_up, char *err, size_t errlen) {
     sm_particles_view pv;
     sm_world_particles(w, &pv);
@@ -50,16 +68,8 @@ sm_status sm_write_ply(const sm_world *w, const char *path, int z_up, char *err,
         free(order);
         return st;
     }
-    const sm_world_def *def = sm_world_get_def(w);
-    fprintf(a.f,
-            "ply\nformat binary_little_endian 1.0\ncomment sandmpm %s\ncomment dim %d\n"
-            "comment domain %.9g %.9g %.9g %.9g %.9g %.9g\ncomment up %c\nelement vertex %zu\n"
-            "property float x\nproperty float y\nproperty float z\n"
-            "property float vx\nproperty float vy\nproperty float vz\n"
-            "property ushort material\nproperty float q\nproperty float friction_angle\nproperty float Je\n"
-            "property float volume\nproperty uint id\nend_header\n",
-            sm_version(), pv.dim, def->domain_min[0], def->domain_min[1], def->domain_min[2], def->domain_max[0],
-            def->domain_max[1], def->domain_max[2], z_up ? 'z' : 'y', pv.n);
+    char header[PLY_HEADER_MAX];
+    fputs(ply_header(header, sizeof header, w, pv.dim, z_up, pv.n) ? header : "", a.f);
     unsigned char rec[PLY_RECORD_BYTES];
     for (size_t k = 0; k < pv.n && !ferror(a.f); k++) {
         sm_out_particle r;
@@ -70,4 +80,44 @@ sm_status sm_write_ply(const sm_world *w, const char *path, int z_up, char *err,
     }
     free(order);
     return sm_atomic_commit(&a, err, errlen);
+}
+
+/* This rank's records, 4096 at a time, at their places after the header. */
+static int write_records(const sm_world *slice, const sm_part_io *io, void *file, size_t at, int z_up,
+                         unsigned char *buf) {
+    sm_particles_view pv;
+    sm_world_particles(slice, &pv);
+    const size_t chunk = 4096;
+    for (size_t k0 = 0; k0 < pv.n; k0 += chunk) {
+        const size_t m = pv.n - k0 < chunk ? pv.n - k0 : chunk;
+        for (size_t k = 0; k < m; k++) { /* the slice holds its particles in id order */
+            sm_out_particle r;
+            sm_out_particle_get(slice, &pv, k0 + k, &r);
+            if (z_up) sm_out_to_z_up(&r);
+            put_record(buf + k * PLY_RECORD_BYTES, &r);
+        }
+        const uint64_t off = at + (io->first + k0) * (uint64_t)PLY_RECORD_BYTES;
+        if (io->write_at(file, off, buf, m * PLY_RECORD_BYTES)) return 1;
+    }
+    return 0;
+}
+
+sm_status sm_write_ply_part(const sm_world *slice, const sm_part_io *io, const char *path, int z_up, char *err,
+                            size_t errlen) {
+    sm_particles_view pv;
+    sm_world_particles(slice, &pv);
+    char header[PLY_HEADER_MAX];
+    const size_t hlen = ply_header(header, sizeof header, slice, pv.dim, z_up, io->total);
+    unsigned char *buf = malloc(4096 * PLY_RECORD_BYTES);
+    sm_status st = buf ? SM_OK : SM_ERR_NOMEM;
+    if (!buf) snprintf(err, errlen, "%s: out of memory", path);
+    void *file = NULL;
+    st = io->agree(io->ctx, st, err, errlen);
+    if (st == SM_OK) st = io->open(io->ctx, path, &file, err, errlen);
+    if (st == SM_OK) {
+        if (!(io->writer && io->write_at(file, 0, header, hlen))) write_records(slice, io, file, hlen, z_up, buf);
+        st = io->close(file, 1, err, errlen); /* a failed write is the file's own: close reports it */
+    }
+    free(buf);
+    return st;
 }

@@ -5,6 +5,7 @@
 
 #include <stddef.h>
 
+#include "app/io/part_file.h"
 #include "sandmpm/sandmpm.h"
 
 /* Writes the particles as VTK XML PolyData (.vtp, raw appended little-endian, UInt64 headers),
@@ -14,6 +15,11 @@
  * z_up: points and velocities z-up (sm_out_to_z_up). Returns SM_OK, SM_ERR_NOMEM or SM_ERR_IO, with
  * a message in err. */
 sm_status sm_write_vtp(const sm_world *w, const char *path, int z_up, char *err, size_t errlen);
+
+/* The same file written by every rank of a run at once (app/io/part_file.h), each its slice's
+ * points at their places in every array: the bytes sm_write_vtp of the whole run gives. Collective. */
+sm_status sm_write_vtp_part(const sm_world *slice, const sm_part_io *io, const char *path, int z_up, char *err,
+                            size_t errlen);
 
 /* Writes a ParaView collection (.pvd) atomically, listing count files (relative names) with their
  * times. SM_OK or SM_ERR_IO with a message. */

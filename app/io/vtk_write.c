@@ -1,7 +1,9 @@
 /* VTK XML writers; see vtk.h. Raw appended data: after "_", each array is a UInt64 byte count and
  * the bytes; the XML header names each array with its offset into that block. A vertex cell per
  * particle, so that every VTK reader shows the points. */
+#define _POSIX_C_SOURCE 200809L
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,7 +33,9 @@ static void arrays_free(vtp_arrays *a) {
     free(a->offs);
 }
 
-static int arrays_fill(vtp_arrays *a, const sm_world *w, const sm_particles_view *pv, int z_up) {
+/* first: the position of the first of these particles in the whole run's id order (the
+ * connectivity counts from the whole run's first point). */
+static int arrays_fill(vtp_arrays *a, const sm_world *w, const sm_particles_view *pv, uint64_t first, int z_up) {
     const size_t n = pv->n, m = n ? n : 1;
     a->xyz = malloc(m * 3 * sizeof(float));
     a->vel = malloc(m * 3 * sizeof(float));
@@ -61,8 +65,8 @@ static int arrays_fill(vtp_arrays *a, const sm_world *w, const sm_particles_view
         a->vol[i] = r.volume;
         a->material[i] = r.material;
         a->id[i] = r.id;
-        a->conn[i] = (int64_t)i;
-        a->offs[i] = (int64_t)i + 1;
+        a->conn[i] = (int64_t)(first + i);
+        a->offs[i] = (int64_t)(first + i) + 1;
     }
     free(order);
     return 1;
@@ -80,12 +84,23 @@ static void array_line(FILE *f, const char *type, const char *name, int comps, u
     *off += 8 + bytes;
 }
 
-static void write_vtp(FILE *f, const vtp_arrays *a, size_t n) {
-    const uint64_t b3 = 12 * (uint64_t)n, b1 = 4 * (uint64_t)n, b2 = 2 * (uint64_t)n, b8 = 8 * (uint64_t)n;
+/* The appended blocks, in file order: their arrays and bytes per point. */
+#define VTP_BLOCKS 10
+static const int block_bytes[VTP_BLOCKS] = {12, 2, 4, 4, 4, 4, 4, 12, 8, 8};
+static void blocks_of(const vtp_arrays *a, const void *data[VTP_BLOCKS]) {
+    const void *d[VTP_BLOCKS] = {a->vel, a->material, a->q, a->phi, a->je, a->vol, a->id, a->xyz, a->conn, a->offs};
+    memcpy(data, d, sizeof d);
+}
+static const char vtp_tail[] = "\n</AppendedData>\n</VTKFile>\n";
+
+/* The XML of a frame of n points, up to and including the "_" that starts the appended data. */
+static void write_vtp_header(FILE *f, uint64_t n) {
+    const uint64_t b3 = 12 * n, b1 = 4 * n, b2 = 2 * n, b8 = 8 * n;
     uint64_t off = 0;
     fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-               "header_type=\"UInt64\">\n<PolyData>\n<Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"%zu\" NumberOfLines=\"0\" "
-               "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n<PointData Scalars=\"q\" Vectors=\"velocity\">\n", n, n);
+               "header_type=\"UInt64\">\n<PolyData>\n<Piece NumberOfPoints=\"%llu\" NumberOfVerts=\"%llu\" NumberOfLines=\"0\" "
+               "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n<PointData Scalars=\"q\" Vectors=\"velocity\">\n",
+            (unsigned long long)n, (unsigned long long)n);
     array_line(f, "Float32", "velocity", 3, &off, b3);
     array_line(f, "UInt16", "material", 1, &off, b2);
     array_line(f, "Float32", "q", 1, &off, b1);
@@ -99,17 +114,14 @@ static void write_vtp(FILE *f, const vtp_arrays *a, size_t n) {
     array_line(f, "Int64", "connectivity", 1, &off, b8);
     array_line(f, "Int64", "offsets", 1, &off, b8);
     fprintf(f, "</Verts>\n</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_");
-    write_block(f, a->vel, b3);
-    write_block(f, a->material, b2);
-    write_block(f, a->q, b1);
-    write_block(f, a->phi, b1);
-    write_block(f, a->je, b1);
-    write_block(f, a->vol, b1);
-    write_block(f, a->id, b1);
-    write_block(f, a->xyz, b3);
-    write_block(f, a->conn, b8);
-    write_block(f, a->offs, b8);
-    fprintf(f, "\n</AppendedData>\n</VTKFile>\n");
+}
+
+static void write_vtp(FILE *f, const vtp_arrays *a, size_t n) {
+    write_vtp_header(f, n);
+    const void *data[VTP_BLOCKS];
+    blocks_of(a, data);
+    for (int b = 0; b < VTP_BLOCKS; b++) write_block(f, data[b], (uint64_t)block_bytes[b] * n);
+    fputs(vtp_tail, f);
 }
 
 sm_status sm_write_vtp(const sm_world *w, const char *path, int z_up, char *err, size_t errlen) {
@@ -118,7 +130,7 @@ sm_status sm_write_vtp(const sm_world *w, const char *path, int z_up, char *err,
     vtp_arrays arr;
     memset(&arr, 0, sizeof arr);
     sm_status st = SM_OK;
-    if (!arrays_fill(&arr, w, &pv, z_up)) {
+    if (!arrays_fill(&arr, w, &pv, 0, z_up)) {
         snprintf(err, errlen, "%s: out of memory", path);
         st = SM_ERR_NOMEM;
     }
@@ -128,6 +140,51 @@ sm_status sm_write_vtp(const sm_world *w, const char *path, int z_up, char *err,
         write_vtp(a.f, &arr, pv.n);
         st = sm_atomic_commit(&a, err, errlen);
     }
+    arrays_free(&arr);
+    return st;
+}
+
+/* This rank's parts: its points' piece of every block (the writer: the XML, the blocks' byte
+ * counts and the tail too). 0 on success. */
+static int write_vtp_parts(const sm_part_io *io, void *file, const char *header, size_t hlen, const vtp_arrays *a,
+                           size_t n) {
+    if (io->writer && io->write_at(file, 0, header, hlen)) return 1;
+    const void *data[VTP_BLOCKS];
+    blocks_of(a, data);
+    uint64_t off = hlen;
+    for (int b = 0; b < VTP_BLOCKS; b++) {
+        const uint64_t bytes = (uint64_t)block_bytes[b] * io->total;
+        if (io->writer && io->write_at(file, off, &bytes, sizeof bytes)) return 1;
+        if (n && io->write_at(file, off + 8 + (uint64_t)block_bytes[b] * io->first, data[b], (size_t)block_bytes[b] * n))
+            return 1;
+        off += 8 + bytes;
+    }
+    return io->writer && io->write_at(file, off, vtp_tail, sizeof vtp_tail - 1);
+}
+
+sm_status sm_write_vtp_part(const sm_world *slice, const sm_part_io *io, const char *path, int z_up, char *err,
+                            size_t errlen) {
+    sm_particles_view pv;
+    sm_world_particles(slice, &pv);
+    vtp_arrays arr;
+    memset(&arr, 0, sizeof arr);
+    char *header = NULL;
+    size_t hlen = 0;
+    FILE *h = open_memstream(&header, &hlen);
+    if (h) {
+        write_vtp_header(h, io->total);
+        if (fclose(h) != 0) header = NULL;
+    }
+    sm_status st = header && arrays_fill(&arr, slice, &pv, io->first, z_up) ? SM_OK : SM_ERR_NOMEM;
+    if (st != SM_OK) snprintf(err, errlen, "%s: out of memory", path);
+    st = io->agree(io->ctx, st, err, errlen);
+    void *file = NULL;
+    if (st == SM_OK) st = io->open(io->ctx, path, &file, err, errlen);
+    if (st == SM_OK) {
+        write_vtp_parts(io, file, header, hlen, &arr, pv.n); /* a failed write: close reports it */
+        st = io->close(file, 1, err, errlen);
+    }
+    free(header);
     arrays_free(&arr);
     return st;
 }

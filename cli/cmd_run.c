@@ -386,8 +386,9 @@ static int run_command(int argc, char **argv) {
     st = cli_ranks_share_status(st);
     if (st == SM_OK && a.resume) st = resume_ranks(&a, sm_scene_world(sc), out, hash, &first);
     cli_ranks ranks;
-    sm_scene *view = NULL; /* rank 0 of several: the scene built again, for the gathered world */
-    if (st == SM_OK && cli_ranks_count() > 1 && cli_rank() == 0) st = cli_ranks_build_view("run", &a.so, seeding, &view);
+    sm_scene *view = NULL; /* rank 0 of several, rendering: the scene built again, for the gathered world */
+    if (st == SM_OK && a.render && cli_ranks_count() > 1 && cli_rank() == 0)
+        st = cli_ranks_build_view("run", &a.so, seeding, &view);
     st = cli_ranks_worst(st);
     char err[SM_MSG_MAX];
     sm_status rs = st == SM_OK ? cli_ranks_open(&ranks, sm_scene_world(sc), view ? sm_scene_world(view) : NULL, seeding, err,

@@ -1,12 +1,15 @@
 /* `sandmpm run` across MPI ranks (mpirun -np N sandmpm run SCENE, N > 1): every rank loads and
  * builds the same scene and advances its share of the world (include/sandmpm/sandmpm_mpi.h); rank
- * 0 alone touches the output folder. At each frame the ranks save the world collectively into
- * rank 0's memory (every particle in id order: the one-rank checkpoint format) and rank 0 restores
- * it into the view, a second world it built from the scene (so that mesh colliders, whose fields a
- * checkpoint does not hold, and motion functions are there), which its sinks write as a one-process run's sinks write
- * theirs: the frame files are the same bytes on any number of ranks. The other ranks print
- * nothing (their standard output and error go to /dev/null once MPI is up): every failure is
- * agreed on, and rank 0 reports it.
+ * 0 alone claims the output folder. At each frame the ranks cut the run into id slices and every
+ * rank writes its slice's parts of the frame files and checkpoints (ranks_files.c, MPI-IO), so
+ * that no rank holds the whole run and the files are the one-process bytes on any number of
+ * ranks; rank 0 writes the small files (manifests, diagnostics) from its own part and the
+ * diagnostics summed over the ranks. Only for PNG renders (--render) do the ranks save the world
+ * collectively into rank 0's memory (every particle in id order: the one-rank checkpoint format),
+ * and rank 0 restores it into the view, a second world it built from the scene (so that mesh
+ * colliders, whose fields a checkpoint does not hold, and motion functions are there). The other
+ * ranks print nothing (their standard output and error go to /dev/null once MPI is up): every
+ * failure is agreed on, and rank 0 reports it.
  *
  * Without MPI (a build with SM_MPI off) these are the one-process answers, and a start under
  * mpirun with several ranks is refused. */
@@ -120,6 +123,9 @@ static int mem_write(void *user, const void *data, size_t len) {
 /* The whole world into the view on rank 0 (collective), and each rank's particle count. */
 static sm_status gather(void *ctx, const sm_world *w, sm_world **view, char *err, size_t errlen) {
     cli_ranks *r = ctx;
+    const int no_view = r->rank == 0 && !r->view; /* cmd_run.c builds it when a sink needs the whole world */
+    if (no_view) snprintf(err, errlen, "no world to gather the ranks' particles into (a bug)");
+    if (cli_ranks_agree(ctx, no_view ? SM_ERR_INVALID : SM_OK, err, errlen) != SM_OK) return SM_ERR_INVALID;
     mem_stream m = {r->stream, 0, r->stream_cap};
     sm_status st = sm_world_save(w, mem_write, &m);
     r->stream = m.data;

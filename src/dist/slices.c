@@ -55,9 +55,9 @@ static int copy_state(sm_id_slice *s, const sm_world *w) {
     c->colliders_cap = ncol;
     c->emitters_cap = w->nemitters;
     if (!c->mats || !c->colliders || !c->emitters) return 0;
-    memcpy(c->mats, w->mats, (size_t)w->nmats * sizeof *c->mats);
-    memcpy(c->colliders, w->colliders, (size_t)ncol * sizeof *c->colliders);
-    memcpy(c->emitters, w->emitters, (size_t)w->nemitters * sizeof *c->emitters);
+    if (w->nmats) memcpy(c->mats, w->mats, (size_t)w->nmats * sizeof *c->mats); /* w's arrays: NULL when empty */
+    if (ncol) memcpy(c->colliders, w->colliders, (size_t)ncol * sizeof *c->colliders);
+    if (w->nemitters) memcpy(c->emitters, w->emitters, (size_t)w->nemitters * sizeof *c->emitters);
     return 1;
 }
 

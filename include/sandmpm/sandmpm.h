@@ -680,6 +680,10 @@ typedef int (*sm_write_fn)(void *user, const void *data, size_t len);
  *  of one written by several: sm_id_slice_save in sandmpm_mpi.h); 0 on success. */
 typedef int (*sm_pwrite_fn)(void *user, uint64_t offset, const void *data, size_t len);
 
+/** Reads len bytes at byte `offset` of a checkpoint into data (a file's pread, a part of memory);
+ *  0 on success, non-zero on a read error (the restore then returns SM_ERR_IO). */
+typedef int (*sm_pread_fn)(void *user, uint64_t offset, void *data, size_t len);
+
 /** Writes the world's complete state through write: a versioned header (magic "SANDMPMC", format
  *  version, precision, dimension), the world definition, materials, colliders (definitions and
  *  their motion state), emitters (definitions, owed mass, emitted count: their whole RNG state),
@@ -703,6 +707,11 @@ SM_API sm_status sm_world_load(const void *data, size_t len, sm_world **out, cha
  *  integrator, transfer and kernel are checked); w keeps its own definitions, so motion
  *  functions stay attached. On failure w is unchanged and the message says why. */
 SM_API sm_status sm_world_restore(sm_world *w, const void *data, size_t len);
+
+/** sm_world_restore from a checkpoint of len bytes read at offsets through read (e.g. from its
+ *  file), so the stream never has to be in memory whole: the memory needed is the restored world's
+ *  plus a few MiB. A failed read is SM_ERR_IO. */
+SM_API sm_status sm_world_restore_read(sm_world *w, sm_pread_fn read, void *user, uint64_t len);
 
 #ifdef __cplusplus
 }

@@ -91,6 +91,21 @@ struct sm_world {
     char err[512];
 };
 
+/* A restore that stores only some of a checkpoint's particles (dist/seeding.c: a rank's share).
+ * census(x) is called for every particle's position, then cut once (collective across the ranks
+ * that restore together: it is called exactly once on every rank, also when the read failed
+ * before the particles, with that status; it returns the status the ranks agree on, its message
+ * in err), then keep(x) for every particle: the kept are stored, in stream order. */
+typedef struct sm_restore_filter {
+    void *user;
+    void (*census)(void *user, const double x[3]);
+    sm_status (*cut)(void *user, sm_status st, char *err, size_t errlen);
+    int (*keep)(void *user, const double x[3]);
+} sm_restore_filter;
+
+/* sm_world_restore_read through filter (NULL: every particle). */
+sm_status sm_world_restore_from(sm_world *w, sm_pread_fn read, void *user, uint64_t len, const sm_restore_filter *filter);
+
 /* Sets the world's message (printf style) and returns status. */
 sm_status sm_world_fail(sm_world *w, sm_status status, const char *fmt, ...)
 #if defined(__GNUC__)

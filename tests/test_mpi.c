@@ -103,9 +103,44 @@ static sm_world *build(int dim, int threads, size_t *ball_id, int implicit) {
     return w;
 }
 
-/* Resumes the checkpoint (rank 0's bytes) on ranks [0, M) and runs it to the end: the final id
- * hash, the same on every rank (0 on ranks past M). */
-static uint64_t resume(sm_test_membuf *ck, int M) {
+static int memory_pread(void *user, uint64_t offset, void *data, size_t len) {
+    const sm_test_membuf *b = user;
+    if (offset > b->len || len > b->len - offset) return 1;
+    memcpy(data, b->data + offset, len);
+    return 0;
+}
+
+static int same_particles(const sm_world *a, const sm_world *b);
+
+/* The checkpoint restored by shares (sm_world_restore_share) into a world built on every rank of
+ * part with a census (none of its particles stored): a truncated stream is refused on every rank
+ * and the world restored again from the whole one; it then holds what sm_world_load +
+ * sm_world_distribute (loaded) left this rank. */
+static sm_world *restore_by_shares(int dim, sm_test_membuf *ck, MPI_Comm part, const sm_world *loaded) {
+    size_t ball_id = 0;
+    CHECK(sm_dist_seeding_create(part, &seeding) == SM_OK);
+    seeding_census = 1;
+    sm_world *w = build(dim, 1, &ball_id, 0);
+    sm_dist_seeding_destroy(seeding);
+    seeding = NULL;
+    seeding_census = 0;
+    CHECK(w != NULL);
+    if (!w) return NULL;
+    sm_test_membuf cut = *ck;
+    cut.len = ck->len / 2;
+    CHECK(sm_world_restore_share(w, part, memory_pread, &cut, cut.len) == SM_ERR_INVALID); /* every rank */
+    sm_dist_stats ds;
+    CHECK(sm_world_dist_stats(w, &ds) == 0);
+    CHECK(sm_world_restore_share(w, part, memory_pread, ck, ck->len) == SM_OK);
+    CHECK(same_particles(w, loaded));
+    CHECK(sm_world_restore_share(w, part, memory_pread, ck, ck->len) == SM_ERR_INVALID); /* distributed already */
+    return w;
+}
+
+/* Resumes the checkpoint (rank 0's bytes) on ranks [0, M) and runs it to the end, loaded whole on
+ * every rank then distributed, and restored by shares: the final id hash, the same on every rank
+ * (0 on ranks past M) and for both ways. */
+static uint64_t resume(int dim, sm_test_membuf *ck, int M) {
     unsigned long long len = ck->len;
     MPI_Bcast(&len, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
     if (rank != 0) {
@@ -122,8 +157,14 @@ static uint64_t resume(sm_test_membuf *ck, int M) {
         CHECK(sm_world_load(ck->data, ck->len, &w, err, sizeof err) == SM_OK);
         if (w) {
             CHECK(sm_world_distribute(w, part) == SM_OK);
-            for (int f = FRAMES / 2 + 1; f <= FRAMES; f++) CHECK(sm_world_advance(w, f * FRAME_DT) == SM_OK);
+            sm_world *s = restore_by_shares(dim, ck, part, w);
+            for (int f = FRAMES / 2 + 1; f <= FRAMES; f++) {
+                CHECK(sm_world_advance(w, f * FRAME_DT) == SM_OK);
+                if (s) CHECK(sm_world_advance(s, f * FRAME_DT) == SM_OK);
+            }
             h = sm_world_id_hash(w);
+            if (s) CHECK(sm_world_id_hash(s) == h);
+            sm_world_destroy(s);
             sm_world_destroy(w);
         }
         MPI_Comm_free(&part);
@@ -329,10 +370,10 @@ static void run(int dim) {
     CHECK(h == ref[0]);
     CHECK(h != h_start);
     const int M = ranks > 1 ? ranks - 1 : 1;
-    const uint64_t hr = resume(&ck, M);
+    const uint64_t hr = resume(dim, &ck, M);
     free(ck.data);
     if (rank == 0)
-        printf("%dD: the checkpoint of frame %d written on %d ranks, resumed on %d: id hash %016llx\n", dim, FRAMES / 2,
+        printf("%dD: the checkpoint of frame %d written on %d ranks, resumed on %d (whole and by shares): id hash %016llx\n", dim, FRAMES / 2,
                ranks, M, (unsigned long long)hr);
     CHECK(hr == ref[0]);
     if (ranks >= 2) CHECK(changes >= (ranks >= 4 ? 2 : 1)); /* several boundaries on 4 ranks */

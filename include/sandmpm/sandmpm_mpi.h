@@ -55,6 +55,19 @@ SM_API sm_status sm_world_seed_share(sm_world *w, sm_dist_seeding *s);
  * the ranks kept every particle of the census once). s may be destroyed afterwards. */
 SM_API sm_status sm_world_distribute_share(sm_world *w, sm_dist_seeding *s);
 
+/** Resumes a distributed run from a checkpoint (of len bytes, read at offsets through read: every
+ *  rank reads the stream itself, e.g. the same file) without any rank holding every particle:
+ *  w is the world built on every rank alike (as for sm_world_restore; built with a census,
+ *  sm_world_seed_census, it stores none of the scene's particles, whose place the checkpoint's
+ *  take), and each rank keeps only its share, with the cuts sm_world_distribute would compute from
+ *  the whole restored world. The ranks end as sm_world_restore of the whole stream then
+ *  sm_world_distribute would leave them (the same particles in the same order, the same cuts), so
+ *  a checkpoint written on N ranks (or one process) resumes on M with the run's bits. Collective;
+ *  the status is the same on every rank. A rank reads the positions twice and of the other fields
+ *  only the pieces that hold its particles. On failure w is not distributed, and its state is the
+ *  checkpoint's on the ranks whose read succeeded: restore it again (e.g. from an older one). */
+SM_API sm_status sm_world_restore_share(sm_world *w, MPI_Comm comm, sm_pread_fn read, void *user, uint64_t len);
+
 /** What the decomposition did: this rank and the number of ranks, this rank's particles, the
  * largest and the mean particle count over the ranks after the last step's migration, the
  * re-balancings, and this rank's traffic of the last step (ghost and migrating particles sent,

@@ -12,6 +12,7 @@
  * would have left it: the same particles, in the same order, with the same cuts (the run's bits do
  * not change). A rank's memory is its share plus the census's (Morton code, count) pairs: 16
  * bytes per block of sand (a block is 4^d cells), and a buffer of SM_SEED_PENDING codes. */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -107,19 +108,21 @@ void sm_dist_seeding_destroy(sm_dist_seeding *s) {
     free(s);
 }
 
+static void take_geometry(sm_dist_seeding *s, const sm_world *w) {
+    s->geo.dim = w->dim;
+    s->geo.stencil = w->def.kernel == SM_KERNEL_CUBIC ? 4 : 3;
+    for (int a = 0; a < 3; a++) s->geo.lo[a] = w->def.domain_min[a];
+    s->geo.inv_dx = w->inv_dx;
+    s->have_geometry = 1;
+}
+
 /* w may join s: no particle added yet, no other seeding, the geometry of the first world. */
 static sm_status attach(sm_world *w, sm_dist_seeding *s, const char *call) {
     if (w->dist) return sm_world_fail(w, SM_ERR_INVALID, "%s: the world is distributed already", call);
     if (w->next_id != 0 || w->p.n != 0 || w->keep)
         return sm_world_fail(w, SM_ERR_INVALID, "%s: the world must have no particles yet (and no other seeding)", call);
     const int stencil = w->def.kernel == SM_KERNEL_CUBIC ? 4 : 3;
-    if (!s->have_geometry) {
-        s->geo.dim = w->dim;
-        s->geo.stencil = stencil;
-        for (int a = 0; a < 3; a++) s->geo.lo[a] = w->def.domain_min[a];
-        s->geo.inv_dx = w->inv_dx;
-        s->have_geometry = 1;
-    }
+    if (!s->have_geometry) take_geometry(s, w);
     int same = s->geo.dim == w->dim && s->geo.stencil == stencil && s->geo.inv_dx == w->inv_dx;
     for (int a = 0; a < 3; a++) same = same && s->geo.lo[a] == w->def.domain_min[a];
     if (!same)
@@ -139,22 +142,32 @@ sm_status sm_world_seed_census(sm_world *w, sm_dist_seeding *s) {
     return SM_OK;
 }
 
-/* The census's counts the same on every rank (every rank counted every particle): the cuts. */
-static sm_status cut(sm_world *w, sm_dist_seeding *s) {
+/* The census's counts the same on every rank (every rank counted every particle): the cuts.
+ * Collective; the status is the same on every rank, its message in err. */
+static sm_status cut_counts(sm_dist_seeding *s, char *err, size_t errlen) {
     int bad = !merge_pending(s) || s->failed, any_bad = 0;
     MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, s->comm);
-    if (any_bad) return sm_world_fail(w, SM_ERR_NOMEM, "sm_world_seed_share: out of memory for the census");
+    if (any_bad) {
+        snprintf(err, errlen, "out of memory for the census");
+        return SM_ERR_NOMEM;
+    }
     /* the ranks' censuses agree: the same count and pairs */
     uint64_t mine[2] = {s->counted, sm_hash64(s->pairs, 2 * s->npairs * sizeof *s->pairs, 0)}, lo[2], hi[2];
     MPI_Allreduce(mine, lo, 2, MPI_UINT64_T, MPI_MIN, s->comm);
     MPI_Allreduce(mine, hi, 2, MPI_UINT64_T, MPI_MAX, s->comm);
-    if (lo[0] != hi[0] || lo[1] != hi[1])
-        return sm_world_fail(w, SM_ERR_INVALID,
-                             "sm_world_seed_share: the ranks' censuses differ (%llu to %llu particles): every rank must "
-                             "build the same world",
-                             (unsigned long long)lo[0], (unsigned long long)hi[0]);
+    if (lo[0] != hi[0] || lo[1] != hi[1]) {
+        snprintf(err, errlen, "the ranks' censuses differ (%llu to %llu particles): every rank must build the same world",
+                 (unsigned long long)lo[0], (unsigned long long)hi[0]);
+        return SM_ERR_INVALID;
+    }
     sm_dist_cuts_from_histogram(&s->geo, s->pairs, s->npairs);
     return SM_OK;
+}
+
+static sm_status cut(sm_world *w, sm_dist_seeding *s) {
+    char msg[256];
+    const sm_status st = cut_counts(s, msg, sizeof msg);
+    return st == SM_OK ? st : sm_world_fail(w, st, "sm_world_seed_share: %s", msg);
 }
 
 sm_status sm_world_seed_share(sm_world *w, sm_dist_seeding *s) {
@@ -168,6 +181,23 @@ sm_status sm_world_seed_share(sm_world *w, sm_dist_seeding *s) {
     s->phase = PHASE_SHARE;
     w->keep = share_keep;
     w->keep_user = s;
+    return SM_OK;
+}
+
+/* w, holding this rank's share, made its part of the run with s's cuts (collective). */
+static sm_status adopt_cuts(sm_world *w, sm_dist_seeding *s, const char *call) {
+    sm_dist *d = sm_dist_create(w, s->comm);
+    int ok = d != NULL, all_ok = 0;
+    MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, s->comm);
+    if (!all_ok) {
+        sm_dist_free(d);
+        return sm_world_fail(w, SM_ERR_NOMEM, "%s: out of memory", call);
+    }
+    memcpy(d->cuts, s->geo.cuts, (size_t)d->size * sizeof *d->cuts);
+    d->owned = w->p.n;
+    w->keep = NULL; /* particles added from now on (emitters): on every rank, each keeps its blocks' */
+    w->keep_user = NULL;
+    sm_dist_attach(w, d);
     return SM_OK;
 }
 
@@ -186,17 +216,52 @@ sm_status sm_world_distribute_share(sm_world *w, sm_dist_seeding *s) {
                              "sm_world_distribute_share: the ranks kept %llu of %llu particles (census: %llu): every rank "
                              "must build the census's world again",
                              (unsigned long long)sum[1], (unsigned long long)hi, (unsigned long long)s->counted);
-    sm_dist *d = sm_dist_create(w, s->comm);
-    int ok = d != NULL, all_ok = 0;
-    MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, s->comm);
-    if (!all_ok) {
-        sm_dist_free(d);
-        return sm_world_fail(w, SM_ERR_NOMEM, "sm_world_distribute_share: out of memory");
+    return adopt_cuts(w, s, "sm_world_distribute_share");
+}
+
+/* ---- Restoring a checkpoint by shares (sm_world_restore_share) ------------------------------- */
+
+static void restore_census(void *user, const double x[3]) { (void)census_keep(user, x); }
+
+static sm_status restore_cut(void *user, sm_status st, char *err, size_t errlen) {
+    sm_dist_seeding *s = user;
+    int bad = st != SM_OK, any_bad = 0;
+    MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, s->comm);
+    if (any_bad) {
+        if (err && errlen) snprintf(err, errlen, "checkpoint: another rank could not read it");
+        return st != SM_OK ? st : SM_ERR_IO;
     }
-    memcpy(d->cuts, s->geo.cuts, (size_t)d->size * sizeof *d->cuts);
-    d->owned = w->p.n;
-    w->keep = NULL; /* particles added from now on (emitters): on every rank, each keeps its blocks' */
+    return cut_counts(s, err, errlen);
+}
+
+/* The worst status over the ranks: a rank that succeeded reports the others' failure. */
+static sm_status agree(sm_world *w, MPI_Comm comm, sm_status st) {
+    int mine = (int)st, worst = 0; /* the largest status code: the same on every rank */
+    MPI_Allreduce(&mine, &worst, 1, MPI_INT, MPI_MAX, comm);
+    if (worst != SM_OK && st == SM_OK) return sm_world_fail(w, (sm_status)worst, "checkpoint: another rank could not restore it");
+    return st;
+}
+
+sm_status sm_world_restore_share(sm_world *w, MPI_Comm comm, sm_pread_fn read, void *user, uint64_t len) {
+    if (w->dist) return sm_world_fail(w, SM_ERR_INVALID, "sm_world_restore_share: the world is distributed already");
+    sm_dist_seeding *s = NULL;
+    sm_status st = agree(w, comm, sm_dist_seeding_create(comm, &s));
+    if (st != SM_OK) {
+        sm_dist_seeding_destroy(s);
+        return st == SM_ERR_NOMEM ? sm_world_fail(w, st, "sm_world_restore_share: out of memory") : st;
+    }
+    take_geometry(s, w);
+    s->phase = PHASE_SHARE;
+    w->keep = NULL; /* a census the world was built with (to store none of the scene's particles) */
     w->keep_user = NULL;
-    sm_dist_attach(w, d);
-    return SM_OK;
+    const sm_restore_filter f = {s, restore_census, restore_cut, share_keep};
+    st = agree(w, comm, read ? sm_world_restore_from(w, read, user, len, &f) : SM_ERR_INVALID);
+    uint64_t mine = w->p.n, sum = 0;
+    MPI_Allreduce(&mine, &sum, 1, MPI_UINT64_T, MPI_SUM, comm);
+    if (st == SM_OK && sum != s->counted)
+        st = sm_world_fail(w, SM_ERR_INVALID, "sm_world_restore_share: the ranks kept %llu of the checkpoint's %llu particles",
+                           (unsigned long long)sum, (unsigned long long)s->counted);
+    if (st == SM_OK) st = adopt_cuts(w, s, "sm_world_restore_share");
+    sm_dist_seeding_destroy(s);
+    return st;
 }

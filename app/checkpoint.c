@@ -152,12 +152,6 @@ static void prune(const char *dir, int keep) {
     }
 }
 
-static uint64_t get_le(const unsigned char *p, int bytes) {
-    uint64_t v = 0;
-    for (int i = 0; i < bytes; i++) v |= (uint64_t)p[i] << (8 * i);
-    return v;
-}
-
 /* out_dir/checkpoints (made if missing) and the file name of frame's checkpoint in it. */
 /* OUT/checkpoints and OUT/checkpoints/ckpt_FRAME.smc into dir and path. */
 static sm_status checkpoint_name(const char *out_dir, int frame, char *dir, size_t dirlen, char *path, size_t pathlen,
@@ -192,38 +186,6 @@ sm_status sm_checkpoint_write(const char *out_dir, const sm_world *w, int frame,
     if (st == SM_OK) st = write_durably(dir, path, w, NULL, frame, scene_hash, err, errlen);
     if (st == SM_OK) prune(dir, keep);
     return st;
-}
-
-sm_status sm_checkpoint_read(const char *path, unsigned char **stream, size_t *len, int *frame, uint64_t *scene_hash,
-                             char *err, size_t errlen) {
-    *stream = NULL;
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        snprintf(err, errlen, "%s: %s", path, strerror(errno));
-        return SM_ERR_IO;
-    }
-    membuf b = {0};
-    unsigned char chunk[65536];
-    size_t k;
-    while ((k = fread(chunk, 1, sizeof chunk, f)) > 0)
-        if (mem_write(&b, chunk, k)) break;
-    fclose(f);
-    const char *why = NULL;
-    if (b.len < TRAILER_BYTES) why = "too short to be a checkpoint (truncated?)";
-    else if (memcmp(b.data + b.len - 8, "SMCK", 4) != 0) why = "no checkpoint trailer (truncated?)";
-    else if (get_le(b.data + b.len - 4, 4) != crc32(0L, b.data, (uInt)(b.len - 4))) why = "checksum mismatch (corrupt)";
-    else if (get_le(b.data + b.len - 16, 8) != b.len - TRAILER_BYTES) why = "stream length mismatch";
-    if (why) {
-        snprintf(err, errlen, "%s: %s", path, why);
-        free(b.data);
-        return SM_ERR_INVALID;
-    }
-    const unsigned char *t = b.data + b.len - TRAILER_BYTES;
-    *frame = (int)get_le(t, 4);
-    *scene_hash = get_le(t + 4, 8);
-    *len = b.len - TRAILER_BYTES;
-    *stream = b.data;
-    return SM_OK;
 }
 
 /* The sink keeps the last frame's state in memory (one sm_world_save per frame: a copy of the

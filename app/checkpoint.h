@@ -37,6 +37,22 @@ sm_status sm_checkpoint_write(const char *out_dir, const sm_world *w, int frame,
 sm_status sm_ckpt_parts_write(const sm_part_io *io, const char *path, int frame, uint64_t scene_hash, char *err,
                               size_t errlen);
 
+/* ---- Reading (checkpoint_read.c) ------------------------------------------------------------ */
+/* A checkpoint file open for reading its stream at offsets. */
+typedef struct sm_checkpoint_file {
+    int fd;
+    int frame;             /* the trailer's */
+    uint64_t scene_hash;   /* the trailer's */
+    uint64_t stream_bytes; /* the library stream's length (the file less its trailer) */
+} sm_checkpoint_file;
+
+/* Opens path and checks its trailer, and with verify its checksum (reading the file through
+ * 64 KiB at a time). SM_OK, or SM_ERR_IO / SM_ERR_INVALID with err (the file closed). */
+sm_status sm_checkpoint_open(const char *path, int verify, sm_checkpoint_file *f, char *err, size_t errlen);
+/* sm_pread_fn over the stream of an open checkpoint file (user: the sm_checkpoint_file). */
+int sm_checkpoint_pread(void *user, uint64_t offset, void *data, size_t len);
+void sm_checkpoint_close(sm_checkpoint_file *f);
+
 /* Checks a checkpoint file's trailer and checksum; on SM_OK *stream and *len are the library stream
  * (malloc'd, free it) and *frame, *scene_hash its trailer's. SM_ERR_INVALID / SM_ERR_IO with err. */
 sm_status sm_checkpoint_read(const char *path, unsigned char **stream, size_t *len, int *frame, uint64_t *scene_hash,

@@ -177,11 +177,19 @@ int cli_ranks_share_bytes(unsigned char **data, size_t *len);
 
 /* A distributed seeding (sandmpm_mpi.h's sm_dist_seeding) of the run's world and rank 0's view. */
 typedef struct cli_seeding cli_seeding;
-/* sc built for the run: over several ranks and unless whole (a resume, whose checkpoint holds
- * every particle), from a census build of the scene loaded again (errors printed, not warnings),
- * then sc with only this rank's share of the particles (*seeding set, for cli_ranks_open);
- * otherwise cli_build_scene(sc) (*seeding NULL). Collective over the ranks. */
-sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *sc, int whole, cli_seeding **seeding);
+/* sc built for the run: over several ranks, from a census build of the scene loaded again (errors
+ * printed, not warnings), then sc with only this rank's share of the particles; for a resume
+ * (whose checkpoint holds the particles) sc as a census, with none stored (cli_resume restores and
+ * distributes it). *seeding is set, for cli_ranks_open. On one process cli_build_scene(sc)
+ * (*seeding NULL). Collective over the ranks. */
+sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *sc, int resume, cli_seeding **seeding);
+/* The checkpoint at path restored into w (collective; the same status on every rank, rank 0's
+ * message in err): on one process sm_world_restore_read, on several sm_world_restore_share (w then
+ * distributed), each rank reading the file itself. */
+sm_status cli_ranks_restore(sm_world *w, const char *path, char *err, size_t errlen);
+/* resume.c: --resume, the newest valid checkpoint in out/checkpoints restored into w (collective);
+ * *first = its frame + 1. Messages printed. */
+sm_status cli_resume(sm_world *w, const char *out, uint64_t hash, int force, int *first);
 /* Rank 0's view (see cli_ranks_open): the scene built again, without its particles when seeding
  * is not NULL (each frame's gathered world replaces them). */
 sm_status cli_ranks_build_view(const char *cmd, const cli_scene_opts *so, cli_seeding *seeding, sm_scene **view);

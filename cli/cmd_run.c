@@ -266,84 +266,6 @@ static uint64_t scene_hash(const cli_scene_opts *so) {
     return sm_run_scene_hash(so->scene, so->params, so->nparams, so->quality);
 }
 
-/* --resume: the newest valid checkpoint in out/checkpoints restored into w; *first = its frame + 1;
- * *kept: its bytes (malloc'd, *kept_len of them). A corrupt or truncated one is reported and the
- * previous one tried. */
-static sm_status resume_world(const run_args *a, sm_world *w, const char *out, uint64_t hash, int *first,
-                              unsigned char **kept, size_t *kept_len) {
-    char dir[SM_PATH_MAX];
-    if (snprintf(dir, sizeof dir, "%s/checkpoints", out) >= (int)sizeof dir - SM_NAME_RESERVE) return SM_ERR_IO;
-    int frames[4096], n = 0;
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    while (d && (e = readdir(d)) && n < 4096) {
-        int f;
-        char tail[8];
-        if (sscanf(e->d_name, "ckpt_%d.sm%7s", &f, tail) == 2 && !strcmp(tail, "c")) frames[n++] = f;
-        if (!strncmp(e->d_name, ".ckpt_", 6) && strstr(e->d_name, ".tmp.")) { /* a killed run's */
-            char p[SM_PATH_MAX];
-            if (snprintf(p, sizeof p, "%s/%s", dir, e->d_name) < (int)sizeof p) unlink(p);
-        }
-    }
-    if (d) closedir(d);
-    for (;;) {
-        int best = -1;
-        for (int i = 0; i < n; i++)
-            if (frames[i] >= 0 && (best < 0 || frames[i] > frames[best])) best = i;
-        if (best < 0) break;
-        char path[SM_PATH_MAX], err[SM_MSG_MAX];
-        const int made = snprintf(path, sizeof path, "%s/ckpt_%08d.smc", dir, frames[best]);
-        frames[best] = -1;
-        if (made >= (int)sizeof path) continue;
-        unsigned char *stream;
-        size_t len;
-        int frame;
-        uint64_t h;
-        if (sm_checkpoint_read(path, &stream, &len, &frame, &h, err, sizeof err) != SM_OK) {
-            fprintf(stderr, "sandmpm run: %s; trying the previous checkpoint\n", err);
-            continue;
-        }
-        if (h != hash && !a->force) {
-            free(stream);
-            fprintf(stderr, "sandmpm run: %s was written for another scene file, --set values or --quality "
-                            "(hash %016llx, now %016llx); refusing to resume (--force resumes anyway)\n",
-                    path, (unsigned long long)h, (unsigned long long)hash);
-            return SM_ERR_INVALID;
-        }
-        sm_status st = sm_world_restore(w, stream, len);
-        if (st != SM_OK) {
-            free(stream);
-            fprintf(stderr, "sandmpm run: %s: %s; trying the previous checkpoint\n", path, sm_world_errmsg(w));
-            continue;
-        }
-        *kept = stream;
-        *kept_len = len;
-        fprintf(stderr, "sandmpm run: resuming from %s (frame %d)\n", path, frame);
-        *first = frame + 1;
-        return SM_OK;
-    }
-    fprintf(stderr, "sandmpm run: --resume: no valid checkpoint in %s/\n", dir);
-    return SM_ERR_IO;
-}
-
-/* --resume on every rank: rank 0 finds the checkpoint and sends its bytes to the others. */
-static sm_status resume_ranks(const run_args *a, sm_world *w, const char *out, uint64_t hash, int *first) {
-    unsigned char *stream = NULL;
-    size_t len = 0;
-    sm_status st = SM_OK;
-    if (cli_rank() == 0) st = resume_world(a, w, out, hash, first, &stream, &len);
-    st = cli_ranks_share_status(st);
-    if (st == SM_OK && cli_ranks_count() > 1) {
-        cli_ranks_share_ints(first, 1);
-        if (!cli_ranks_share_bytes(&stream, &len)) st = SM_ERR_NOMEM;
-        else if (cli_rank() != 0) st = sm_world_restore(w, stream, len);
-        st = cli_ranks_worst(st);
-        if (st != SM_OK) fprintf(stderr, "sandmpm run: --resume: the checkpoint could not be sent to every rank\n");
-    }
-    free(stream);
-    return st;
-}
-
 /* The run manifest's description of this run, before any frame (app/run_outputs.h). */
 static void describe_run(const run_args *a, const sm_scene_settings *set, uint64_t hash, int nframes, sm_run_manifest *m) {
     const sm_run_request r = run_request(a, hash, nframes);
@@ -384,7 +306,7 @@ static int run_command(int argc, char **argv) {
     const cli_claim claim = {a.resume, a.overwrite};
     if (st == SM_OK && cli_rank() == 0) st = cli_claim_folder(out, &claim, &manifest);
     st = cli_ranks_share_status(st);
-    if (st == SM_OK && a.resume) st = resume_ranks(&a, sm_scene_world(sc), out, hash, &first);
+    if (st == SM_OK && a.resume) st = cli_resume(sm_scene_world(sc), out, hash, a.force, &first);
     cli_ranks ranks;
     sm_scene *view = NULL; /* rank 0 of several, rendering: the scene built again, for the gathered world */
     if (st == SM_OK && a.render && cli_ranks_count() > 1 && cli_rank() == 0)

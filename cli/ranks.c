@@ -18,6 +18,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "app/checkpoint.h"
+#include "app/io/files.h"
 #include "cli/cli.h"
 #include "sandmpm/config.h"
 
@@ -26,6 +28,17 @@ int cli_ranks_launched(void) {
     if (!v) v = getenv("PMI_SIZE");
     const int n = v ? atoi(v) : 1;
     return n > 1 ? n : 1;
+}
+
+/* The checkpoint at path restored into the world of one process. */
+static sm_status restore_one(sm_world *w, const char *path, char *err, size_t errlen) {
+    sm_checkpoint_file f;
+    sm_status st = sm_checkpoint_open(path, 0, &f, err, errlen);
+    if (st != SM_OK) return st;
+    st = sm_world_restore_read(w, sm_checkpoint_pread, &f, f.stream_bytes);
+    sm_checkpoint_close(&f);
+    snprintf(err, errlen, "%s", st == SM_OK ? "" : sm_world_errmsg(w));
+    return st;
 }
 
 #if SM_HAVE_MPI
@@ -156,6 +169,7 @@ static int any(void *ctx, int flag) {
 struct cli_seeding {
     sm_dist_seeding *share; /* the run's world */
     sm_dist_seeding *view;  /* rank 0's view: a census, so that it stores no particle */
+    int resume;             /* the run's world a census too, its particles the checkpoint's */
 };
 
 static sm_status census_hook(void *user, sm_world *w) { return sm_world_seed_census(w, user); }
@@ -168,20 +182,23 @@ void cli_seeding_free(cli_seeding *s) {
     free(s);
 }
 
-sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *sc, int whole, cli_seeding **seeding) {
+sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *sc, int resume, cli_seeding **seeding) {
     *seeding = NULL;
-    if (cli_ranks_count() <= 1 || whole) return cli_build_scene(cmd, sc);
+    if (cli_ranks_count() <= 1) return cli_build_scene(cmd, sc);
     cli_seeding *s = calloc(1, sizeof *s);
     sm_status st = s && sm_dist_seeding_create(MPI_COMM_WORLD, &s->share) == SM_OK &&
                            (cli_rank() != 0 || sm_dist_seeding_create(MPI_COMM_SELF, &s->view) == SM_OK)
                        ? SM_OK
                        : SM_ERR_NOMEM;
     if (st != SM_OK) fprintf(stderr, "sandmpm %s: out of memory\n", cmd);
+    if (s) s->resume = resume;
     sm_scene *census = NULL;
-    if (st == SM_OK) st = cli_build_again(cmd, so, census_hook, s->share, &census);
+    if (st == SM_OK && resume) sm_scene_on_world(sc, census_hook, s->share);
+    else if (st == SM_OK) st = cli_build_again(cmd, so, census_hook, s->share, &census);
     sm_scene_destroy(census);
     st = cli_ranks_worst(st);
-    if (st == SM_OK) {
+    if (st == SM_OK && resume) st = cli_ranks_worst(cli_build_scene(cmd, sc));
+    else if (st == SM_OK) {
         sm_scene_on_world(sc, share_hook, s->share);
         st = cli_ranks_worst(cli_build_scene(cmd, sc));
     }
@@ -202,12 +219,32 @@ sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, cli_seeding 
     r->view = r->rank == 0 ? view : NULL;
     r->shares = calloc((size_t)r->count, sizeof *r->shares);
     sm_status st = r->shares ? SM_OK : SM_ERR_NOMEM;
-    if (st == SM_OK && (st = seeding ? sm_world_distribute_share(w, seeding->share) : sm_world_distribute(w, MPI_COMM_WORLD)) !=
-                           SM_OK)
+    if (st == SM_OK && seeding && seeding->resume) { /* distributed by cli_ranks_restore */
+        sm_dist_stats ds;
+        if (!sm_world_dist_stats(w, &ds)) snprintf(err, errlen, "the resumed world is not distributed (a bug)"), st = SM_ERR_INVALID;
+    } else if (st == SM_OK &&
+               (st = seeding ? sm_world_distribute_share(w, seeding->share) : sm_world_distribute(w, MPI_COMM_WORLD)) != SM_OK)
         snprintf(err, errlen, "%s", sm_world_errmsg(w));
     else if (st != SM_OK)
         snprintf(err, errlen, "out of memory");
     r->hooks = (sm_run_ranks){r, r->rank == 0, gather, cli_ranks_agree, any, cli_ranks_slice};
+    return st;
+}
+
+sm_status cli_ranks_restore(sm_world *w, const char *path, char *err, size_t errlen) {
+    if (cli_ranks_count() <= 1) return restore_one(w, path, err, errlen);
+    sm_checkpoint_file f;
+    char mine[SM_MSG_MAX] = "";
+    const sm_status opened = sm_checkpoint_open(path, 0, &f, mine, sizeof mine);
+    sm_status st = cli_ranks_agree(NULL, opened, mine, sizeof mine);
+    if (st != SM_OK) {
+        if (opened == SM_OK) sm_checkpoint_close(&f);
+        snprintf(err, errlen, "%s", mine);
+        return st;
+    }
+    st = sm_world_restore_share(w, MPI_COMM_WORLD, sm_checkpoint_pread, &f, f.stream_bytes);
+    sm_checkpoint_close(&f);
+    snprintf(err, errlen, "%s", st == SM_OK ? "" : sm_world_errmsg(w));
     return st;
 }
 
@@ -237,8 +274,8 @@ int cli_ranks_share_bytes(unsigned char **data, size_t *len) {
     (void)data, (void)len;
     return 1;
 }
-sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *sc, int whole, cli_seeding **seeding) {
-    (void)so, (void)whole;
+sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *sc, int resume, cli_seeding **seeding) {
+    (void)so, (void)resume;
     *seeding = NULL;
     return cli_build_scene(cmd, sc);
 }
@@ -247,6 +284,9 @@ sm_status cli_ranks_build_view(const char *cmd, const cli_scene_opts *so, cli_se
     return cli_build_again(cmd, so, NULL, NULL, view);
 }
 void cli_seeding_free(cli_seeding *s) { (void)s; }
+sm_status cli_ranks_restore(sm_world *w, const char *path, char *err, size_t errlen) {
+    return restore_one(w, path, err, errlen);
+}
 sm_status cli_ranks_open(cli_ranks *r, sm_world *w, sm_world *view, cli_seeding *seeding, char *err, size_t errlen) {
     (void)w, (void)view, (void)seeding, (void)err, (void)errlen;
     memset(r, 0, sizeof *r);

@@ -86,6 +86,22 @@ S=$SRC/scenes/shovel.lua
 "$BIN" run "$S" --quality test --frames 4 --checkpoint-every 0 --out "$TMP/resume-1" -q
 ranks 3 run "$S" --quality test --frames 2 --checkpoint-every 1 --out "$TMP/resume" -q 2>"$TMP/err" ||
     bad "shovel on 3 ranks: $(cat "$TMP/err")"
+# A corrupt newest checkpoint: rank 0 finds it out by its crc32, and the ranks resume together
+# from the previous one (each reading its share of the file), to the same frames.
+cp -r "$TMP/resume" "$TMP/resume-bad"
+f2=$TMP/resume-bad/checkpoints/ckpt_00000002.smc
+if [ -f "$f2" ] && [ -f "$TMP/resume-bad/checkpoints/ckpt_00000001.smc" ]; then
+    printf 'X' | dd of="$f2" bs=1 seek=$(($(stat -c %s "$f2") / 2)) conv=notrunc status=none
+    if ranks 3 run "$S" --quality test --frames 4 --checkpoint-every 1 --out "$TMP/resume-bad" --resume 2>"$TMP/err"; then
+        grep -qF "checksum mismatch" "$TMP/err" && grep -qF "resuming from $TMP/resume-bad/checkpoints/ckpt_00000001.smc" "$TMP/err" &&
+            ok || bad "corrupt checkpoint on 3 ranks: no fall-back to frame 1: $(head -4 "$TMP/err")"
+        same_frames "$TMP/resume-1" "$TMP/resume-bad" "resumed on 3 ranks past a corrupt checkpoint"
+    else
+        bad "corrupt checkpoint on 3 ranks: exit $?: $(head -c 600 "$TMP/err")"
+    fi
+else
+    bad "shovel on 3 ranks: checkpoints of frames 1 and 2 missing"
+fi
 # (The ranks' parts and the crc32 combined from them: the resume checks the trailer's crc. The
 # bytes differ from a one-process checkpoint's in the particles' order, by id here, and in the
 # stage timings.)

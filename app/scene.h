@@ -108,6 +108,15 @@ sm_status sm_scene_build(sm_scene *s, char *err, size_t errlen);
 typedef sm_status (*sm_scene_world_hook)(void *user, sm_world *w);
 void sm_scene_on_world(sm_scene *s, sm_scene_world_hook hook, void *user);
 
+/* Counts summed over the processes that build the scene together, each with its share of the
+ * particles (an MPI run's ranks: sandmpm_mpi.h's sm_world_seed_share), so that the build's
+ * warnings count every particle, not this process's: v[0 .. n) replaced by the sums.
+ * sm_scene_build calls it (collective) once with n = 1 after seeding, also when the build failed
+ * before (v[0]: whether this process failed), and once more with the counts if none did. NULL:
+ * one process. */
+typedef void (*sm_scene_sum_hook)(void *user, uint64_t *v, int n);
+void sm_scene_on_sum(sm_scene *s, sm_scene_sum_hook hook, void *user);
+
 /* The world (NULL before a successful sm_scene_build). Owned by the scene. */
 sm_world *sm_scene_world(sm_scene *s);
 

@@ -173,6 +173,10 @@ struct cli_seeding {
 };
 
 static sm_status census_hook(void *user, sm_world *w) { return sm_world_seed_census(w, user); }
+static void sum_hook(void *user, uint64_t *v, int n) {
+    (void)user;
+    MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
+}
 static sm_status share_hook(void *user, sm_world *w) { return sm_world_seed_share(w, user); }
 
 void cli_seeding_free(cli_seeding *s) {
@@ -197,6 +201,7 @@ sm_status cli_ranks_build(const char *cmd, const cli_scene_opts *so, sm_scene *s
     else if (st == SM_OK) st = cli_build_again(cmd, so, census_hook, s->share, &census);
     sm_scene_destroy(census);
     st = cli_ranks_worst(st);
+    sm_scene_on_sum(sc, sum_hook, NULL); /* the build's warnings count every rank's particles */
     if (st == SM_OK && resume) st = cli_ranks_worst(cli_build_scene(cmd, sc));
     else if (st == SM_OK) {
         sm_scene_on_world(sc, share_hook, s->share);

@@ -140,6 +140,8 @@ struct sm_scene {
     int built;
     sm_scene_world_hook on_world; /* sm_scene_on_world */
     void *on_world_user;
+    sm_scene_sum_hook sum;        /* sm_scene_on_sum */
+    void *sum_user;
     char motion_err[1024];
     int nwarn;                           /* warnings given (more than SC_MAX_WARN are counted only) */
     char warn[SC_MAX_WARN][SC_WARN_LEN]; /* "PATH:LINE: key: what looks wrong" */

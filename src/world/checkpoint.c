@@ -1,5 +1,6 @@
 /* Checkpoints: the world's complete evolving state to a byte stream and back (sandmpm.h,
- * sm_world_save / sm_world_load / sm_world_restore; docs/checkpoints.md has the layout).
+ * sm_world_save and sm_world_save_part here; reading back, sm_world_load / sm_world_restore /
+ * sm_world_restore_read, in checkpoint_read.c; docs/checkpoints.md has the layout).
  *
  * Every field of struct sm_world (world.h) is accounted for here:
  *   saved      def; materials' defs; user colliders' defs (motion pointers as a flag) and their

@@ -121,6 +121,29 @@ than μ times the normal impulse, and gravity walks the block down the slope. Th
 test_incline's 10 mm bound measures, and why it fails at elastic_cfl 0.7 (a longer transient, not
 a lasting creep); the pooled rule above removes it because it sums the ringing contact.
 
+**The fit window** (measured 2026-12-06 at a139f79 with docs/experiments/incline_window.c, this
+table's 2D block and set-ups, the double build, max Δt 2e-5 s, separating plane): the table fits
+over [0.05 s, 0.2 s], while the block still rings after its drop onto the plane. Fitted later, the
+near-threshold errors shrink by one to two orders of magnitude (relative error for μ = 0.5, error
+over g for μ = 0.7):
+
+| set-up | μ | [0.05, 0.2] s | [0.3, 0.8] s | [0.5, 1.2] s | [0.8, 1.6] s |
+|---|---|---|---|---|---|
+| tilted | 0.5 | +6.58e-02 | +3.29e-03 | +9.78e-04 | −1.10e-03 |
+| tilted | 0.7 | +1.58e-02 | +5.63e-04 | −1.78e-03 | +1.23e-03 |
+| aligned | 0.5 | +1.68e-02 | +3.01e-03 | +6.80e-03 | +4.29e-03 |
+| aligned | 0.7 | −3.54e-03 | −8.21e-04 | −9.37e-04 | −1.05e-03 |
+
+So most of the defect the table shows is the release transient, not a lasting shortfall of the
+per-node rule: once the block is quiet the tilted (not grid aligned) plane comes within about
+1e-3, and the static block's fitted acceleration changes sign from window to window (it holds,
+with a residual oscillation of about 1e-3 g). The grid-aligned plane at μ = 0.5 stays 3–7e-3 fast
+in every late window: not understood (the aligned plane lies on a grid line; its contact nodes
+are the nodes on that line, φ = 0, and below it). The table
+keeps the early window because the fast cases (μ ≤ 0.3) leave the domain within about 1 s; a
+per-case window, or a block released in its settled state, would make the table measure the
+sustained contact the analytic value assumes.
+
 **Gravity-loaded elastic column** (`sm_validate column`): 2D plane strain, H = 1 m, width H/4 between
 slip walls on a slip base, ρ 1000, E 1e7, ν 0.3, released stress free; the stress is averaged over 8
 periods of the column's oscillation (the average of a linear oscillation over whole periods is the

@@ -4,7 +4,9 @@
  * error is the block's release transient.
  *   mpicc -O2 -std=c11 -fopenmp -I include -I build-double -I build-double/include \
  *         docs/experiments/incline_window.c build-double/libsandmpm.a -lm -o /tmp/incline_window
- *   /tmp/incline_window DIM THETA MU TILTED T0 T1 [MAX_DT]     (TILTED 1: plane turned in the grid)
+ *   /tmp/incline_window DIM THETA MU TILTED T0 T1 [MAX_DT [OFFSET]]  (TILTED 1: plane turned in the grid)
+ * OFFSET (cells, aligned plane only): the plane y = 0.2 m + OFFSET dx instead of on the grid line
+ * y = 0.2 m (docs/validation.md section 6, "where the plane lies in the grid").
  * (mpicc when the library was built with MPI; gcc otherwise.) Prints expected and fitted
  * acceleration along the slope and the error as sm_validate reports it. */
 #include <math.h>
@@ -18,7 +20,7 @@ static int fail(const char *what, sm_world *w) {
 }
 /* validation/analytic.c's incline_run with the start of the fit window, t0, as a parameter. */
 static double incline_run(int dim, double th_deg, double mu, int tilted, sm_collide_mode mode, double max_dt,
-                          double t0, double t_end) {
+                          double t0, double t_end, double offset) {
     const double th = th_deg * PI / 180;
     sm_world_def def = sm_world_def_default();
     def.dim = dim;
@@ -39,7 +41,7 @@ static double incline_run(int dim, double th_deg, double mu, int tilted, sm_coll
         def.gravity[0] = -G * sin(th);
         def.gravity[1] = -G * cos(th);
     }
-    const double p0[3] = {tilted ? 1.0 : 1.6, tilted ? 0.6 : 0.2, 0.15};
+    const double p0[3] = {tilted ? 1.0 : 1.6, tilted ? 0.6 : 0.2 + offset * def.dx, 0.15};
     sm_world *w = NULL;
     char err[256];
     if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) {
@@ -83,15 +85,16 @@ static double incline_run(int dim, double th_deg, double mu, int tilted, sm_coll
 
 int main(int argc, char **argv) {
     if (argc < 7) {
-        fprintf(stderr, "usage: incline_window DIM THETA MU TILTED T0 T1 [MAX_DT]\n");
+        fprintf(stderr, "usage: incline_window DIM THETA MU TILTED T0 T1 [MAX_DT [OFFSET]]\n");
         return 2;
     }
     const int dim = atoi(argv[1]), tilted = atoi(argv[4]);
     const double th = atof(argv[2]), mu = atof(argv[3]), t0 = atof(argv[5]), t1 = atof(argv[6]);
-    const double dt = argc > 7 ? atof(argv[7]) : 2e-5, r = th * PI / 180;
+    const double dt = argc > 7 ? atof(argv[7]) : 2e-5, offset = argc > 8 ? atof(argv[8]) : 0, r = th * PI / 180;
     const double expect = tan(r) > mu ? G * (sin(r) - mu * cos(r)) : 0;
-    const double a = incline_run(dim, th, mu, tilted, SM_COLLIDE_SEPARATE, dt, t0, t1);
-    printf("%d,%s,%g,%g,%g,%g,%g,%.6f,%.6f,%.3g\n", dim, tilted ? "tilted" : "aligned", th, mu, dt, t0, t1, expect, a,
+    const double a = incline_run(dim, th, mu, tilted, SM_COLLIDE_SEPARATE, dt, t0, t1, offset);
+    printf("%d,%s,%g,%g,%g,%g,%g,%g,%.6f,%.6f,%.3g\n", dim, tilted ? "tilted" : "aligned", th, mu, dt, offset, t0, t1,
+           expect, a,
            expect > 0 ? (a - expect) / expect : a / G);
     return 0;
 }

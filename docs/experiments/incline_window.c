@@ -4,9 +4,11 @@
  * error is the block's release transient.
  *   mpicc -O2 -std=c11 -fopenmp -I include -I build-double -I build-double/include \
  *         docs/experiments/incline_window.c build-double/libsandmpm.a -lm -o /tmp/incline_window
- *   /tmp/incline_window DIM THETA MU TILTED T0 T1 [MAX_DT [OFFSET]]  (TILTED 1: plane turned in the grid)
+ *   /tmp/incline_window DIM THETA MU TILTED T0 T1 [MAX_DT [OFFSET [EXTRA]]]  (TILTED 1: plane turned in the grid)
  * OFFSET (cells, aligned plane only): the plane y = 0.2 m + OFFSET dx instead of on the grid line
- * y = 0.2 m (docs/validation.md section 6, "where the plane lies in the grid").
+ * y = 0.2 m (docs/validation.md section 6, "where the plane lies in the grid"). EXTRA (m): the
+ * block starts that much farther up a slope as much longer, as in validation/analytic.c (2.6 there).
+ * With EXTRA 0 the aligned block's upper end (x = 2.0 m) lies inside the domain wall at 1.98 m.
  * (mpicc when the library was built with MPI; gcc otherwise.) Prints expected and fitted
  * acceleration along the slope and the error as sm_validate reports it. */
 #include <math.h>
@@ -20,14 +22,14 @@ static int fail(const char *what, sm_world *w) {
 }
 /* validation/analytic.c's incline_run with the start of the fit window, t0, as a parameter. */
 static double incline_run(int dim, double th_deg, double mu, int tilted, sm_collide_mode mode, double max_dt,
-                          double t0, double t_end, double offset) {
+                          double t0, double t_end, double offset, double extra) {
     const double th = th_deg * PI / 180;
     sm_world_def def = sm_world_def_default();
     def.dim = dim;
     def.dx = dim == 2 ? 0.01 : 0.02;
     def.max_dt = max_dt;
-    def.domain_max[0] = 2.0;
-    def.domain_max[1] = 1.3;
+    def.domain_max[0] = 2.0 + (extra > 0 ? extra + 0.5 : 0);
+    def.domain_max[1] = 1.3 + (tilted ? extra * sin(th) : 0);
     def.domain_max[2] = 0.3;
     /* tilted: plane through p0 with normal n, gravity -y; aligned: plane y = 0.2, gravity along
      * (-sin th, -cos th) in the grid: down the slope is -x */
@@ -60,7 +62,7 @@ static double incline_run(int dim, double th_deg, double mu, int tilted, sm_coll
     c.friction = mu;
     if (sm_world_add_collider(w, &c, NULL) != SM_OK) fail("collider", w);
     sm_shape box = sm_shape_default(SM_SHAPE_BOX);
-    const double hy = 0.05, up = 0.6 * (tilted ? 1 : 0.5);
+    const double hy = 0.05, up = 0.6 * (tilted ? 1 : 0.5) + extra;
     for (int a = 0; a < 3; a++) box.center[a] = p0[a] - up * tdown[a] + (hy + 0.25 * def.dx) * n[a];
     box.center[2] = 0.15;
     box.half_extent[0] = 0.1, box.half_extent[1] = hy, box.half_extent[2] = 0.05;
@@ -85,14 +87,15 @@ static double incline_run(int dim, double th_deg, double mu, int tilted, sm_coll
 
 int main(int argc, char **argv) {
     if (argc < 7) {
-        fprintf(stderr, "usage: incline_window DIM THETA MU TILTED T0 T1 [MAX_DT [OFFSET]]\n");
+        fprintf(stderr, "usage: incline_window DIM THETA MU TILTED T0 T1 [MAX_DT [OFFSET [EXTRA]]]\n");
         return 2;
     }
     const int dim = atoi(argv[1]), tilted = atoi(argv[4]);
     const double th = atof(argv[2]), mu = atof(argv[3]), t0 = atof(argv[5]), t1 = atof(argv[6]);
-    const double dt = argc > 7 ? atof(argv[7]) : 2e-5, offset = argc > 8 ? atof(argv[8]) : 0, r = th * PI / 180;
+    const double dt = argc > 7 ? atof(argv[7]) : 2e-5, offset = argc > 8 ? atof(argv[8]) : 0,
+                 extra = argc > 9 ? atof(argv[9]) : 0, r = th * PI / 180;
     const double expect = tan(r) > mu ? G * (sin(r) - mu * cos(r)) : 0;
-    const double a = incline_run(dim, th, mu, tilted, SM_COLLIDE_SEPARATE, dt, t0, t1, offset);
+    const double a = incline_run(dim, th, mu, tilted, SM_COLLIDE_SEPARATE, dt, t0, t1, offset, extra);
     printf("%d,%s,%g,%g,%g,%g,%g,%g,%.6f,%.6f,%.3g\n", dim, tilted ? "tilted" : "aligned", th, mu, dt, offset, t0, t1,
            expect, a,
            expect > 0 ? (a - expect) / expect : a / G);

@@ -45,13 +45,16 @@ static int fail(const char *what, sm_world *w) {
     exit(3);
 }
 
-/* One block-on-incline run (set-up 0 aligned, 1 tilted, 2 shifted); returns the acceleration
- * along the slope fitted over [t0, t_end]. `extra` (m) lengthens the slope above the plane's
+/* The incline's set-ups, in the order of the table. */
+enum { INCLINE_TILTED, INCLINE_ALIGNED, INCLINE_SHIFTED, INCLINE_SETUPS };
+
+/* One block-on-incline run (setup: INCLINE_*); returns the acceleration along the slope fitted
+ * over [t0, t_end]. `extra` (m) lengthens the slope above the plane's
  * anchor p0: the block starts that much farther up it. */
 static double incline_run(int dim, double th_deg, double mu, int setup, sm_collide_mode mode, double max_dt,
                           double t0, double t_end, double extra) {
     const double th = th_deg * PI / 180;
-    const int tilted = setup == 1;
+    const int tilted = setup == INCLINE_TILTED;
     sm_world_def def = sm_world_def_default();
     def.dim = dim;
     def.dx = dim == 2 ? 0.01 : 0.02;
@@ -71,7 +74,7 @@ static double incline_run(int dim, double th_deg, double mu, int setup, sm_colli
         def.gravity[0] = -G * sin(th);
         def.gravity[1] = -G * cos(th);
     }
-    const double p0[3] = {tilted ? 1.0 : 1.6, tilted ? 0.6 : 0.2 + (setup == 2 ? 0.5 * def.dx : 0), 0.15};
+    const double p0[3] = {tilted ? 1.0 : 1.6, tilted ? 0.6 : 0.2 + (setup == INCLINE_SHIFTED ? 0.5 * def.dx : 0), 0.15};
     sm_world *w = NULL;
     char err[256];
     if (sm_world_create(&def, &w, err, sizeof err) != SM_OK) {
@@ -113,7 +116,7 @@ static double incline_run(int dim, double th_deg, double mu, int setup, sm_colli
 }
 
 static void incline(int quick) {
-    static const char *const setups[] = {"aligned", "tilted", "shifted"};
+    static const char *const names[INCLINE_SETUPS] = {"tilted", "aligned", "shifted"};
     printf("dim,setup,mode,theta,mu,max_dt,expected,measured,rel_error\n");
     /* theta, mu, mode (0 separate, 1 slip), max_dt; 3D: the first case, tilted only */
     const double cases[][4] = {{30, 0.2, 0, 2e-5}, {30, 0.0, 0, 2e-5}, {30, 0.5, 0, 2e-5}, {30, 0.7, 0, 2e-5},
@@ -121,10 +124,9 @@ static void incline(int quick) {
     const int nc = quick ? 2 : (int)(sizeof cases / sizeof cases[0]);
     /* the fit window, and the slope the fastest case (45 deg, mu 0.3: 4.9 m/s^2) needs for it */
     const double t0 = quick ? 0.05 : 0.5, t_end = quick ? 0.15 : 1.2, extra = quick ? 0 : 2.6;
-    const int order[] = {1, 0, 2};
     for (int dim = 2; dim <= 3; dim++)
-        for (int o = 0; o < 3; o++) {
-            const int setup = order[o], tilted = setup == 1;
+        for (int setup = 0; setup < INCLINE_SETUPS; setup++) {
+            const int tilted = setup == INCLINE_TILTED;
             const int count = dim == 3 ? (tilted ? 1 : 0) : (tilted ? nc : (nc < 4 ? nc : 4));
             for (int i = 0; i < count; i++) {
                 double th = cases[i][0], mu = cases[i][1], dt = dim == 3 ? 1e-4 : cases[i][3];
@@ -132,7 +134,7 @@ static void incline(int quick) {
                 double r = th * PI / 180;
                 double expect = tan(r) > mu ? G * (sin(r) - mu * cos(r)) : 0;
                 double a = incline_run(dim, th, mu, setup, mode, dt, t0, t_end, extra);
-                printf("%d,%s,%s,%g,%g,%g,%.6f,%.6f,%.3g\n", dim, setups[setup],
+                printf("%d,%s,%s,%g,%g,%g,%.6f,%.6f,%.3g\n", dim, names[setup],
                        mode == SM_COLLIDE_SLIP ? "slip" : "separate", th, mu, dt, expect, a,
                        expect > 0 ? (a - expect) / expect : a / G);
                 fflush(stdout);

@@ -107,12 +107,12 @@ steadily — 14 mm by 0.3 s, 68 mm by 1.2 s, at about 5 cm/s throughout — and 
 9.4 mm by 0.3 s, 34 mm by 1.2 s, at about 3 cm/s. Coulomb friction with μ > tan θ must stop it. Not the
 creep of contact nodes that hold a small share of the mass (tests/test_incline.c describes that
 one, g sin θ Δt M / m_contact, without static_friction_sticks): it would halve with Δt, and with
-max Δt 1e-5 s instead of 2e-5 s the aligned block still slid 62 mm by 1.2 s (68 mm). Why it slides
-is not found yet, but the transfer decides it: with PIC (which damps the block's ringing) the same
-aligned block moves 0.072 mm in all and holds (3e-12 m/s at 1.2 s). So it is the release
-transient of "the static creep" below, which on a grid-aligned plane does not die out under APIC;
-the next step is the contact nodes' stick/slip states there.
-**Correction:** until this commit the aligned block's
+max Δt 1e-5 s instead of 2e-5 s the aligned block still slid 62 mm by 1.2 s (68 mm). It slides
+under APIC only: with PIC (which damps the block's ringing) the same aligned block moves 0.072 mm
+in all and holds (3e-12 m/s at 1.2 s). So it is the release transient of "the static creep" below;
+what keeps it going on a grid-aligned plane under APIC is not found yet (the next step: the contact
+nodes' stick/slip states there).
+**Correction:** until commit dd0d68e the aligned block's
 upper end (x = 2.0 m) lay inside the domain wall (2 cells inside the domain's face, at 1.98 m),
 which held the static aligned block; the by-hand aligned rows of "the fit window" below carry that
 wall contact (docs/experiments/incline_window.c's default geometry still has it; its EXTRA argument

@@ -16,22 +16,25 @@ csv=out/scaling/scaling.csv
 {
     printf 'dim,mode,ranks,threads,particles,steps,seconds,particle_steps_per_s,ghosts_per_step,migrating_per_step,bytes_per_step,messages_per_step,imbalance,recuts'
     "$B/bench/mpi_scaling" --stage-names 2>/dev/null || true
-    echo ',exchange_wait_s' # the slowest rank's time blocked on the exchange's messages
+    echo ',exchange_wait_s,overlap,early_per_step' # the slowest rank's time blocked on the exchange's messages; the overlap setting, the particles scattered while the messages travelled
 } > "$csv"
-run() { # ranks threads args...
+run() { # ranks threads args... (OV=0: the exchange not overlapped with the inner blocks' P2G)
     local np=$1 th=$2; shift 2
-    mpirun -np "$np" --oversubscribe --bind-to none -x OMP_NUM_THREADS="$th" "$B/bench/mpi_scaling" "$@" "$th" | tee -a "$csv"
+    mpirun -np "$np" --oversubscribe --bind-to none -x OMP_NUM_THREADS="$th" "$B/bench/mpi_scaling" "$@" "$th" ${OV:+"$OV"} |
+        tee -a "$csv"
 }
 for n in 200000 1000000; do
     run 1 1 3 strong $n 30
     run 1 2 3 strong $n 30
     run 2 1 3 strong $n 30
+    OV=0 run 2 1 3 strong $n 30 # the same without the overlap
     run 4 1 3 strong $n 10 # oversubscribed: functional only
 done
 run 1 1 3 weak 500000 30
 run 2 1 3 weak 500000 30
 run 1 1 2 strong 1000000 30
 run 2 1 2 strong 1000000 30
+OV=0 run 2 1 2 strong 1000000 30
 for np_th in "1 1" "1 2" "2 1" "4 1"; do # the implicit integrator (4 ranks oversubscribed: functional only)
     run $np_th 3 implicit 125000 3
 done

@@ -12,9 +12,14 @@ particle including the grid (`sandmpm bench --dim 3 --precision float`, default 
 
 Assumptions (each is a line below): a node of 64 cores at this machine's per-core speed, one rank
 per node; a rank's blocks form a cube-like region with 6 neighbours, each face receiving the same
-layer as the 2-rank interface; no overlap of the exchange with compute (the code has none yet);
-full-duplex links, so a step's network time is the bytes received over the bandwidth, plus 26
-messages at 5 us each."""
+layer as the 2-rank interface; full-duplex links, so a step's network time is the bytes received
+over the bandwidth, plus 26 messages at 5 us each. The exchange overlaps with the binning and P2G
+of the rank's inner blocks (dist/overlap.c: blocks whose blocks within two are all the rank's):
+the work that can hide the network is the 1-rank row's sort + P2G seconds per particle-step times
+the inner particles, (L - 2 d)^3 / L^3 of a cube of L cells on a side at 8 particles per cell, d
+= 10 cells (the two blocks of the test and up to half a block more for the colour order); the
+step takes compute + max(0, network - that). The columns without overlap are the step as before
+(compute + network)."""
 import csv
 import sys
 
@@ -47,9 +52,12 @@ print("Inputs (measured): %.3g particle-steps/s per core; P2G %.3g ns per partic
       "one interface's layer k = %.3g x N^(2/3) (%.0f ghosts per step at %.3g particles on 2 ranks); "
       "%.0f bytes per ghost; %.1f bytes per particle with the grid.\n" %
       (rate_core, p2g_core * 1e9, k, ghosts2, n2, bytes_per_ghost, bpp))
+sort_p2g_core = (float(one["sort_s"]) + float(one["p2g_s"])) / (float(one["particles"]) * steps)
+DEPTH = 10  # cells at a face that are not inner (see the top)
 print("| nodes | particles per node | ghosts per node per step | memory per node | halo per step | "
-      "network time at 25 / 100 Gb/s | compute time | particle-steps/s at 25 / 100 Gb/s | limited by |")
-print("|---|---|---|---|---|---|---|---|---|")
+      "network time at 25 / 100 Gb/s | compute time | inner share, work hiding the network | "
+      "particle-steps/s at 25 / 100 Gb/s, no overlap | with overlap | limited by |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 for nodes in (16, 64, 256):
     n = N / nodes
     g = 6 * k * n ** (2.0 / 3)
@@ -58,6 +66,13 @@ for nodes in (16, 64, 256):
     t_comp = n / (rate_core * CORES) + g * p2g_core / CORES
     t_net = [halo / (gbps * 1e9 / 8) + 26 * MSG_S for gbps in (25, 100)]
     rate = [N / (t_comp + t) for t in t_net]
-    limit = "network" if t_net[0] > t_comp else "compute"
-    print("| %d | %.3g | %.3g (%.0f%%) | %.1f GB | %.2f GB | %.3f / %.3f s | %.3f s | %.3g / %.3g | %s at 25 Gb/s |" %
-          (nodes, n, g, 100 * g / n, mem / 1e9, halo / 1e9, t_net[0], t_net[1], t_comp, rate[0], rate[1], limit))
+    side = (n / 8) ** (1.0 / 3)  # cells
+    inner = max(0.0, (side - 2 * DEPTH) / side) ** 3
+    t_hide = sort_p2g_core * n * inner / CORES
+    over = [N / (t_comp + max(0.0, t - t_hide)) for t in t_net]
+    limit = ", ".join("%s at %d Gb/s" % ("network" if t > t_hide else "compute", gbps)
+                      for t, gbps in zip(t_net, (25, 100)))
+    print("| %d | %.3g | %.3g (%.0f%%) | %.1f GB | %.2f GB | %.3f / %.3f s | %.3f s | %.0f%%, %.3f s | %.3g / %.3g | "
+          "%.3g / %.3g | %s |" %
+          (nodes, n, g, 100 * g / n, mem / 1e9, halo / 1e9, t_net[0], t_net[1], t_comp, 100 * inner, t_hide,
+           rate[0], rate[1], over[0], over[1], limit))

@@ -14,6 +14,10 @@
  *  - seeding by shares (sm_dist_seeding: a census build, then each rank builds its share only)
  *    leaves every rank the particles, order and fields of sm_world_distribute of the whole world,
  *    and 4 frames later the same state and traffic; misuse is refused;
+ *  - the exchange overlapped with the binning and P2G of each rank's inner blocks (dist/overlap.c,
+ *    on by default: the runs above; in 2D some particles are scattered that way), switched off,
+ *    and made to redo every early scatter (the path of a particle arriving next to an inner
+ *    block): the same final state; the recut's histogram sorted (its cuts ascend);
  *  - messages in pieces (dist/message.c; a rank's share can pass MPI's INT_MAX bytes): the 2D
  *    run sends every message, the checkpoint's gather included, in pieces of 997 bytes (prime: no
  *    piece boundary falls between particles), and rank 0's last message is several pieces. */
@@ -271,7 +275,7 @@ static void check_slices(const sm_world *w, const sm_test_membuf *ck) {
     sm_id_slice_destroy(s);
 }
 
-static void run(int dim) {
+static uint64_t run(int dim) {
     size_t ball_id = 0;
     /* One rank, two threads: the reference. */
     uint64_t ref[1] = {0};
@@ -300,7 +304,7 @@ static void run(int dim) {
 
     sm_world *w = build(dim, 1, &ball_id, 0);
     CHECK(w != NULL);
-    if (!w) return;
+    if (!w) return ref[0];
     const uint64_t h_start = sm_world_id_hash(w);
     double n0, m0, p0[3];
     totals(w, 1, &n0, &m0, p0); /* every rank holds every particle before sm_world_distribute */
@@ -315,6 +319,7 @@ static void run(int dim) {
     MPI_Allreduce(&empty, &any_empty, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     CHECK(!any_empty);
     int owner = holder(w, ball_id), changes = 0;
+    double early = 0; /* particles scattered while the exchange's messages travelled, last step of each frame */
     CHECK(owner >= 0);
     sm_test_membuf ck = {NULL, 0, 0};
     for (int f = 1; f <= FRAMES; f++) {
@@ -340,6 +345,9 @@ static void run(int dim) {
         CHECK(now >= 0);
         changes += now != owner;
         owner = now;
+        sm_dist_stats fs;
+        sm_world_dist_stats(w, &fs);
+        early += (double)fs.early_particles; /* the frame's last step */
     }
     const uint64_t h = sm_world_id_hash(w);
     /* Diagnostics over the ranks (collective): the one-rank run's to the rounding of the sums'
@@ -360,13 +368,16 @@ static void run(int dim) {
     CHECK(sm_world_dist_stats(w, &ds) == 1);
     CHECK(ds.ranks == ranks && ds.rank == rank);
     if (piece && ranks >= 2) CHECK(ds.bytes_sent > 3 * piece); /* rank 0 sent a message of several pieces */
+    double early_all = 0;
+    MPI_Allreduce(&early, &early_all, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
     if (rank == 0)
         printf("%dD (%s kernel) on %d ranks: id hash %016llx (one rank, 2 threads: %016llx), the ball's owner changed %d times, "
                "rank 0: %zu particles, %zu ghosts and %zu migrating sent in the last step (%zu bytes, %zu messages), "
-               "%llu cuts\n",
+               "%llu cuts; %.0f particles scattered during the exchange (the frames' last steps, all ranks)\n",
                dim, kernel == SM_KERNEL_CUBIC ? "cubic" : "quadratic", ranks, (unsigned long long)h,
                (unsigned long long)ref[0], changes, ds.particles, ds.ghosts_sent,
-               ds.migrated_sent, ds.bytes_sent, ds.messages_sent, (unsigned long long)ds.rebalances);
+               ds.migrated_sent, ds.bytes_sent, ds.messages_sent, (unsigned long long)ds.rebalances, early_all);
+    if (dim == 2) CHECK(early_all > 0); /* the overlap ran (3D: the test's block is too small for inner blocks on 2+ ranks) */
     CHECK(h == ref[0]);
     CHECK(h != h_start);
     const int M = ranks > 1 ? ranks - 1 : 1;
@@ -378,6 +389,44 @@ static void run(int dim) {
     CHECK(hr == ref[0]);
     if (ranks >= 2) CHECK(changes >= (ranks >= 4 ? 2 : 1)); /* several boundaries on 4 ranks */
     sm_world_destroy(w);
+    return ref[0];
+}
+
+/* The exchange's overlap (dist/overlap.c) switched off (0), and forced to redo its early scatter
+ * every step (2: the path taken when a particle arrives next to an inner block): the same final
+ * state as the one-rank run `ref`; the public switch refuses what it should. */
+static void run_overlap_modes(int dim, uint64_t ref) {
+    for (int mode = 0; mode <= 2; mode += 2) {
+        size_t ball_id = 0;
+        sm_world *w = build(dim, 1, &ball_id, 0);
+        CHECK(w != NULL);
+        if (!w) return;
+        CHECK(sm_world_set_dist_overlap(w, 1) == SM_ERR_INVALID); /* not distributed yet */
+        CHECK(sm_world_distribute(w, MPI_COMM_WORLD) == SM_OK);
+        CHECK(sm_world_set_dist_overlap(w, 2) == SM_ERR_INVALID);
+        CHECK(sm_world_set_dist_overlap(w, mode ? 1 : 0) == SM_OK);
+        sm_dist_set_overlap(w, mode);
+        double early = 0;
+        for (int f = 1; f <= FRAMES; f++) {
+            CHECK(sm_world_advance(w, f * FRAME_DT) == SM_OK);
+            sm_dist_stats ds;
+            sm_world_dist_stats(w, &ds);
+            early += (double)ds.early_particles;
+        }
+        const uint64_t h = sm_world_id_hash(w);
+        sm_dist_stats ds;
+        sm_world_dist_stats(w, &ds);
+        double redone = (double)ds.overlap_redone, redone_all = 0;
+        MPI_Allreduce(&redone, &redone_all, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+        if (rank == 0)
+            printf("%dD on %d ranks, overlap mode %d: id hash %016llx (one rank: %016llx), early scatters redone %.0f times\n",
+                   dim, ranks, mode, (unsigned long long)h, (unsigned long long)ref, redone_all);
+        CHECK(h == ref);
+        CHECK(early == 0); /* mode 0: none; mode 2: every early scatter redone (and not counted) */
+        if (mode == 0) CHECK(redone_all == 0);
+        else CHECK(redone_all > 0);
+        sm_world_destroy(w);
+    }
 }
 
 /* The particles of a and b the same (count, order, every field read here). */
@@ -507,7 +556,8 @@ int main(int argc, char **argv) {
     MPI_Init(&argc, &argv);
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);
-    run(2);
+    const uint64_t ref2 = run(2);
+    run_overlap_modes(2, ref2);
     run(3);
     kernel = SM_KERNEL_CUBIC; /* a stencil of 4: more of a block's particles reach the next block */
     run(2);

@@ -82,12 +82,24 @@ typedef struct sm_dist_stats {
     size_t ghosts_sent, migrated_sent;
     size_t bytes_sent, messages_sent;
     size_t halo_bytes_sent, halo_messages_sent, halo_refreshes; /* implicit: grid node vectors to other ranks */
-    double exchange_wait_s; /* the last exchange's time blocked on its messages (s): at most what overlapping
-                               the exchange with interior work could hide */
+    double exchange_wait_s; /* the last exchange's time blocked on its messages (s), after the work overlapped
+                               with them */
+    size_t early_particles; /* the last step's particles scattered (P2G) while the exchange's messages
+                               travelled: those of this rank's inner blocks (sm_world_set_dist_overlap) */
+    uint64_t overlap_redone; /* steps whose early scatter was redone because an arriving particle joined an
+                                inner block (one faster than a cell per step) */
 } sm_dist_stats;
 
 /** Fills *out (collective only at sm_world_distribute; here local). 0 if w is not distributed. */
 SM_API int sm_world_dist_stats(const sm_world *w, sm_dist_stats *out);
+
+/** Whether an explicit step overlaps its exchange of particles with work (1, the default): while
+ * the messages travel, each rank bins the particles it kept and scatters (P2G) its inner blocks,
+ * those that no arriving particle reaches, then the rest when the messages are in. 0: the
+ * exchange first, then the step (as before). The results are the same bits either way; the
+ * overlap pays where the network, not the processor, moves the bytes (docs/scaling.md). Local
+ * (set it alike on every rank); SM_ERR_INVALID if w is not distributed or on is not 0 or 1. */
+SM_API sm_status sm_world_set_dist_overlap(sm_world *w, int on);
 
 /* ---- Id slices: the whole run in id order, one contiguous piece per rank ---------------------
  * For writing one file on several ranks (a frame, a checkpoint) without any rank holding the

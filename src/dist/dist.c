@@ -99,6 +99,22 @@ static long block_histogram(sm_dist *d, const sm_particles *P, size_t n) {
     return np;
 }
 
+/* (code, count) pairs sorted by code, equal codes merged (counts added); returns the pairs left. */
+static size_t merge_histogram(uint64_t *pairs, size_t np) {
+    qsort(pairs, np, 2 * sizeof *pairs, sm_dist_cmp_u64); /* compares the codes */
+    size_t k = 0;
+    for (size_t i = 0; i < np; i++) {
+        if (k > 0 && pairs[2 * (k - 1)] == pairs[2 * i]) {
+            pairs[2 * (k - 1) + 1] += pairs[2 * i + 1];
+            continue;
+        }
+        pairs[2 * k] = pairs[2 * i];
+        pairs[2 * k + 1] = pairs[2 * i + 1];
+        k++;
+    }
+    return k;
+}
+
 void sm_dist_cuts_from_histogram(sm_dist *d, const uint64_t *pairs, size_t np) {
     uint64_t total = 0;
     for (size_t i = 0; i < np; i++) total += pairs[2 * i + 1];
@@ -129,8 +145,11 @@ sm_status sm_dist_recut(sm_world *w) {
     uint64_t *all = malloc((size_t)(total ? total : 1) * sizeof *all);
     if (!all) return sm_world_fail(w, SM_ERR_NOMEM, "distributed run: out of memory for the block histogram");
     MPI_Allgatherv(d->hist, pairs2, MPI_UINT64_T, all, counts, displs, MPI_UINT64_T, d->comm);
-    /* The ranks' blocks lie in their ranges, ranges in rank order: the concatenation is sorted. */
-    sm_dist_cuts_from_histogram(d, all, (size_t)total / 2);
+    /* The ranks' particles have moved since the last exchange: some lie outside their rank's
+     * range, and a block may be on two ranks. Sorted by code and merged, the histogram is the
+     * same whatever rank held what (the cuts were not monotone before, which sm_dist_owner's
+     * search does not expect: a rank's blocks were then not one Morton range). */
+    sm_dist_cuts_from_histogram(d, all, merge_histogram(all, (size_t)total / 2));
     free(all);
     d->stats.rebalances++;
     return SM_OK;
@@ -309,6 +328,7 @@ void sm_dist_free(sm_dist *d) {
     free(d->cuts);
     free(d->hist);
     free(d->scratch);
+    free(d->lists);
     sm_dist_halo_free(d->halo);
     MPI_Comm_free(&d->comm);
     free(d);
@@ -332,6 +352,7 @@ sm_dist *sm_dist_create(const sm_world *w, MPI_Comm comm) {
     d->req = calloc(2 * P, sizeof *d->req);
     d->req_cap = 2 * P;
     d->piece = SM_DIST_PIECE;
+    d->overlap = 1;
     if (!d->cuts || !d->own_out || !d->ghost_out || !d->counts || !d->req) {
         sm_dist_free(d);
         return NULL;

@@ -15,12 +15,18 @@
  * block's particles in ascending id (bin_dim.c). So the grid velocities an owned particle reads
  * are bitwise those of a one-rank run, and G2P and plasticity run on owned blocks only. At the
  * end of the step the ghosts are dropped. Grid blocks at the outer edge of the ghost layer are
- * incomplete; nothing reads them (the grid health check skips them). */
+ * incomplete; nothing reads them (the grid health check skips them).
+ *
+ * The exchange overlaps with interior work (overlap.c): while its messages travel, an explicit
+ * step bins the particles this rank kept and scatters the blocks that no arrival can touch, then
+ * bins the arrivals as a second batch and scatters the rest; every node still sums its
+ * contributions in colour order. */
 #ifndef SM_DIST_H
 #define SM_DIST_H
 
 #include "core/common.h"
 #include "core/step_ctx.h"
+#include "grid/bin.h"
 
 struct sm_world;
 struct sm_imp_ranks;
@@ -35,8 +41,25 @@ typedef struct sm_dist sm_dist;
 #define SM_DIST_PIECE ((size_t)1 << 30)
 
 #if SM_HAVE_MPI
-/* Migration, re-balancing and ghosts (collective). */
-sm_status sm_dist_exchange(struct sm_world *w, const sm_step_ctx *c);
+/* Migration, re-balancing and ghosts (collective), in two parts: _begin routes the particles and
+ * posts the messages, leaving the storage with the particles this rank kept; *overlap says whether
+ * the step may bin them and scatter its inner blocks before _finish (overlap.c); _finish waits
+ * for the messages and appends the arrivals and the ghosts. */
+sm_status sm_dist_exchange_begin(struct sm_world *w, int *overlap);
+sm_status sm_dist_exchange_finish(struct sm_world *w);
+/* Lets MPI move the exchange's messages (between the inner blocks' colours). */
+void sm_dist_progress(struct sm_world *w);
+/* After the kept particles' binning: marks the particle blocks whose P2G needs nothing the
+ * messages bring (pb[].early) and returns them by colour, or NULL if there are none
+ * (overlap.c). */
+const sm_block_lists *sm_dist_inner_blocks(struct sm_world *w);
+/* After the arrivals' binning (sm_bin_more from `kept`): the blocks still to scatter, by colour.
+ * If an arrival joined an inner block or its neighbours (a particle faster than a cell per step,
+ * or the test mode), the grid is zeroed, the marks cleared and NULL returned: scatter all. */
+const sm_block_lists *sm_dist_outer_blocks(struct sm_world *w, size_t kept);
+/* 1 (default) or 0: whether explicit steps overlap the exchange; 2: overlap and always redo
+ * (tests the fallback). Results are the same bits in every mode. */
+void sm_dist_set_overlap(struct sm_world *w, int mode);
 /* The implicit solve's traffic for this step's live grid blocks (halo.c; collective, after the
  * binning): *out for sm_implicit_sys.ranks. */
 sm_status sm_dist_halo_plan(struct sm_world *w, const struct sm_imp_ranks **out);
@@ -67,7 +90,12 @@ void sm_dist_free(sm_dist *d);
  * SM_DIST_PIECE restores SM_DIST_PIECE). */
 void sm_dist_set_piece_bytes(struct sm_world *w, size_t bytes);
 #else
-static inline sm_status sm_dist_exchange(struct sm_world *w, const sm_step_ctx *c) { (void)w; (void)c; return SM_OK; }
+static inline sm_status sm_dist_exchange_begin(struct sm_world *w, int *overlap) { (void)w; *overlap = 0; return SM_OK; }
+static inline sm_status sm_dist_exchange_finish(struct sm_world *w) { (void)w; return SM_OK; }
+static inline void sm_dist_progress(struct sm_world *w) { (void)w; }
+static inline const sm_block_lists *sm_dist_inner_blocks(struct sm_world *w) { (void)w; return NULL; }
+static inline const sm_block_lists *sm_dist_outer_blocks(struct sm_world *w, size_t kept) { (void)w; (void)kept; return NULL; }
+static inline void sm_dist_set_overlap(struct sm_world *w, int mode) { (void)w; (void)mode; }
 static inline sm_status sm_dist_halo_plan(struct sm_world *w, const struct sm_imp_ranks **out) {
     (void)w;
     *out = NULL;

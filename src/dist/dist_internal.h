@@ -6,6 +6,7 @@
 #include <mpi.h>
 
 #include "dist/dist.h"
+#include "grid/bin.h"
 #include "sandmpm/sandmpm_mpi.h"
 
 typedef struct sm_dist_halo sm_dist_halo; /* halo.c: the implicit solve's grid traffic */
@@ -35,6 +36,13 @@ struct sm_dist {
     uint32_t *scratch;        /* the owned particles' order for a reorder */
     size_t scratch_cap;
     int since_recut;          /* steps since the last cut */
+    size_t pending;           /* the exchange's requests in flight (sm_dist_exchange_begin .. _finish) */
+    int overlap;              /* 1 (default): an explicit step scatters its inner blocks while the exchange's
+                                 messages travel (overlap.c); 2: also redo them every step (a test of the
+                                 fallback); 0: the exchange first */
+    uint32_t *lists;          /* overlap.c: the block lists of sm_dist_inner_blocks / sm_dist_outer_blocks */
+    size_t lists_cap;
+    sm_block_lists inner, outer;
     sm_dist_halo *halo;       /* NULL until an implicit step */
     sm_dist_stats stats;
 };

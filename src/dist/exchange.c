@@ -21,7 +21,11 @@
  *      q and alpha stay with the owner, whose G2P and plasticity alone read them), in an
  *      implicit one every field (the solve evaluates the ghosts' stress at F^E(v));
  *   4. receive, in rank order: migrating particles appended to [0, owned), then the ghosts.
- * Storage order does not matter to the results (a block's particles are summed in id order). */
+ * sm_dist_exchange_begin does 1-3 and leaves the messages in flight; sm_dist_exchange_finish
+ * waits for them and does 4. Between the two, an explicit step bins the particles this rank kept
+ * and scatters its inner blocks (overlap.c), calling sm_dist_progress now and then. Storage
+ * order does not matter to the results (a block's particles are summed in id order). */
+#include <limits.h>
 #include <string.h>
 
 #include "dist/dist_internal.h"
@@ -118,7 +122,8 @@ static int route(sm_dist *d, sm_particles *P, size_t ps, size_t gs) {
     return ok;
 }
 
-/* 3-4. Sends the buffers, receives into d->in (rank after rank: migrating, then ghosts). */
+/* 3. Posts the sends of the buffers and the receives into d->in (rank after rank: migrating, then
+ * ghosts); d->pending requests are in flight. */
 static int send_receive(sm_dist *d, size_t ps, size_t gs) {
     const int P = d->size;
     int *sent = d->counts, *recv = d->counts + 2 * P;
@@ -161,9 +166,7 @@ static int send_receive(sm_dist *d, size_t ps, size_t gs) {
         d->stats.messages_sent++;
         d->stats.ghosts_sent += (size_t)sent[2 * r + 1];
     }
-    const double t0 = MPI_Wtime();
-    sm_dist_wait(d, nreq);
-    d->stats.exchange_wait_s = MPI_Wtime() - t0;
+    d->pending = nreq;
     return 1;
 }
 
@@ -204,20 +207,53 @@ static sm_status place(sm_world *w, size_t ps, size_t gs) {
     return SM_OK;
 }
 
-sm_status sm_dist_exchange(sm_world *w, const sm_step_ctx *c) {
-    (void)c;
+/* The packed sizes of a migrating particle and of a ghost: an explicit step's ghosts carry what
+ * P2G reads; the implicit solve's read F^E and alpha too. */
+static void packed_sizes(const sm_world *w, size_t *ps, size_t *gs) {
+    *ps = sm_particles_packed_size(w->dim);
+    *gs = w->def.integrator == SM_INTEGRATOR_IMPLICIT ? *ps : sm_particles_p2g_size(w->dim);
+}
+
+static sm_status out_of_memory(sm_world *w) {
+    return sm_world_fail(w, SM_ERR_NOMEM, "step %llu: out of memory for the particles exchanged between ranks",
+                         (unsigned long long)w->steps + 1);
+}
+
+sm_status sm_dist_exchange_begin(sm_world *w, int *overlap) {
     sm_dist *d = w->dist;
-    /* An explicit step's ghosts carry what P2G reads; the implicit solve's read F^E and alpha. */
-    const size_t ps = sm_particles_packed_size(d->dim);
-    const size_t gs = w->def.integrator == SM_INTEGRATOR_IMPLICIT ? ps : sm_particles_p2g_size(d->dim);
+    size_t ps, gs;
+    packed_sizes(w, &ps, &gs);
     d->stats.ghosts_sent = d->stats.migrated_sent = 0;
+    d->stats.early_particles = 0;
+    const uint64_t recuts = d->stats.rebalances;
     if (balance(w) != SM_OK) return SM_ERR_NOMEM;
     int ok = route(d, &w->p, ps, gs), all_ok = 0;
     MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, d->comm);
-    if (!all_ok || !send_receive(d, ps, gs) || place(w, ps, gs) != SM_OK)
-        return sm_world_fail(w, SM_ERR_NOMEM, "step %llu: out of memory for the particles exchanged between ranks",
-                             (unsigned long long)w->steps + 1);
+    if (!all_ok || !send_receive(d, ps, gs)) return out_of_memory(w);
+    /* A re-cut moves blocks between ranks wholesale: this step's arrivals may land anywhere. */
+    *overlap = d->overlap && d->stats.rebalances == recuts && w->def.integrator != SM_INTEGRATOR_IMPLICIT;
     return SM_OK;
+}
+
+void sm_dist_progress(sm_world *w) {
+    sm_dist *d = w->dist;
+    int done = 0;
+    for (size_t at = 0; at < d->pending;) { /* MPI_Testall's count is int */
+        const int k = (int)(d->pending - at < (size_t)INT_MAX ? d->pending - at : (size_t)INT_MAX);
+        MPI_Testall(k, d->req + at, &done, MPI_STATUSES_IGNORE);
+        at += (size_t)k;
+    }
+}
+
+sm_status sm_dist_exchange_finish(sm_world *w) {
+    sm_dist *d = w->dist;
+    size_t ps, gs;
+    packed_sizes(w, &ps, &gs);
+    const double t0 = MPI_Wtime();
+    sm_dist_wait(d, d->pending);
+    d->pending = 0;
+    d->stats.exchange_wait_s = MPI_Wtime() - t0;
+    return place(w, ps, gs) == SM_OK ? SM_OK : out_of_memory(w);
 }
 
 /* The owned particles in block order (perm of the binning, ghosts left out); reordered when a

@@ -23,7 +23,17 @@ typedef struct sm_pblock {
     uint32_t start, end;    /* positions in perm */
     uint32_t ascending;     /* 1: perm[start..end) increases (storage order is id order here) */
     uint32_t gslot[8];
+    uint32_t more;          /* sm_bin_more only: the block's particles of the second batch, then its cursor */
+    uint32_t early;         /* 1: scattered by P2G before the second batch (dist/overlap.c); 0 after a full
+                               binning, and for the blocks a second batch adds */
 } sm_pblock;
+
+/* Particle blocks grouped by colour: blocks[offset[c] .. offset[c + 1]) are indices into sm_bins.pb of
+ * colour c. P2G scatters a list's colours in order (transfer.h, sm_p2g_io.lists). */
+typedef struct sm_block_lists {
+    const uint32_t *blocks;
+    uint32_t offset[9];
+} sm_block_lists;
 
 /* What a full binning was computed from: the next step may keep it only if these are unchanged. */
 typedef struct sm_bins_basis {
@@ -72,6 +82,14 @@ void sm_bins_range(const sm_bins *b, const uint32_t *list, long first, long last
  * blocks (zeroed for P2G: sm_grid_zero) and every block's grid slots; reorders the particle
  * storage (every field) by block when a block's particles are no longer mostly contiguous. */
 sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c);
+/* A second batch (a distributed step's arrivals, dist/overlap.c): b and g hold the binning of
+ * particles [0, first) that sm_bin_particles made with P->n = first; particles [first, P->n) are
+ * added, and b and g become what sm_bin_particles of all P->n particles would make of them (the
+ * same blocks, slots, colours and, per block, particles in ascending id), except that the P2G
+ * arrays of the grid blocks already live keep their values (the blocks new to the grid are
+ * zeroed) and the storage is not reordered. The early marks stay with their blocks. perm must
+ * have room for P->n (sm_bins_reserve_perm). */
+sm_status SM_FN(sm_bin_more)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c, size_t first);
 #endif
 
 #endif

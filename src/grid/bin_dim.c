@@ -19,7 +19,14 @@
  *      particles are no longer mostly contiguous (every later pass then streams).
  * Before all of these, bins_still_hold: when no particle has left its block since the last
  * binning (a pile at rest, a slow scene), steps 1-6 would give it again, and only the grid is
- * zeroed. */
+ * zeroed.
+ *
+ * A second batch (sm_bin_more, for a distributed step whose P2G starts before the arrivals):
+ * the new particles counted per block (new blocks appended), the blocks sorted by key again,
+ * each block's stretch of perm moved up to make room (from the last block down, so nothing is
+ * overwritten), the new particles scattered after the old ones and each block put in id order;
+ * the new grid blocks merged into the live ones (grid.c, sm_grid_add_blocks: the values of the
+ * others kept), then slots and colours as in 4b and 5. */
 #include "core/dim.h"
 
 #include <string.h>
@@ -185,6 +192,7 @@ static void publish_blocks(sm_bins *b, size_t nne, int T) {
         b->pb[r].key = pairs[2 * r];
         b->pb[r].start = (uint32_t)(pairs[2 * r + 1] >> 32);
         b->pb[r].end = (uint32_t)pairs[2 * r + 1];
+        b->pb[r].more = b->pb[r].early = 0;
     }
     b->npb = nne;
     sm_block_hash_clear(&b->pb_hash);
@@ -343,6 +351,132 @@ static int bins_still_hold(sm_bins *b, const sm_particles *P, const sm_grid *g, 
     }
     return held;
 }
+
+/* ---- A second batch -------------------------------------------------------------------- */
+
+/* Counts particles [first, n) into their blocks' `more`, appending the blocks not known yet
+ * (serial, in particle order). */
+static sm_status count_more(sm_bins *b, const sm_particles *P, size_t first, const sm_step_ctx *c) {
+    sm_block_hash *ph = &b->pb_hash;
+    for (size_t r = 0; r < b->npb; r++) b->pb[r].more = 0;
+    uint64_t last = UINT64_MAX;
+    uint32_t slot = SM_NO_SLOT;
+    for (size_t p = first; p < P->n; p++) {
+        const uint64_t k = particle_key(c, P->x + p * D, c->stencil);
+        if (k != last) {
+            last = k;
+            slot = sm_block_hash_find(ph, k);
+        }
+        if (slot == SM_NO_SLOT) {
+            const size_t nb = b->npb;
+            if (grow((void **)&b->pb, &b->pb_cap, nb + 1, sizeof *b->pb) != SM_OK) return SM_ERR_NOMEM;
+            if (ph->cap < 2 * (nb + 1)) {
+                if (sm_block_hash_reserve(ph, nb + 1) != SM_OK) return SM_ERR_NOMEM;
+                for (size_t q = 0; q < nb; q++) sm_block_hash_put(ph, b->pb[q].key, (uint32_t)q);
+            }
+            memset(&b->pb[nb], 0, sizeof b->pb[nb]);
+            b->pb[nb].key = k;
+            slot = sm_block_hash_put(ph, k, (uint32_t)nb);
+            b->npb = nb + 1;
+        }
+        b->pb[slot].more++;
+    }
+    return SM_OK;
+}
+
+static int cmp_pblock(const void *a, const void *b) {
+    const uint64_t x = ((const sm_pblock *)a)->key, y = ((const sm_pblock *)b)->key;
+    return (x > y) - (x < y);
+}
+
+/* The blocks in key order again; each block's old particles moved to the front of its new
+ * stretch, `more` its cursor for the new ones. New starts never fall below old ones, so moving
+ * from the last block down overwrites nothing not yet moved. */
+static void make_room(sm_bins *b) {
+    qsort(b->pb, b->npb, sizeof *b->pb, cmp_pblock);
+    sm_block_hash_clear(&b->pb_hash);
+    uint32_t end = 0;
+    for (size_t r = 0; r < b->npb; r++) {
+        sm_block_hash_put(&b->pb_hash, b->pb[r].key, (uint32_t)r);
+        end += b->pb[r].end - b->pb[r].start + b->pb[r].more;
+    }
+    for (size_t r = b->npb; r-- > 0;) {
+        sm_pblock *pb = &b->pb[r];
+        const uint32_t len = pb->end - pb->start, start = end - len - pb->more;
+        memmove(b->perm + start, b->perm + pb->start, len * sizeof *b->perm);
+        pb->more = start + len;
+        pb->start = start;
+        pb->end = end;
+        end = start;
+    }
+}
+
+/* Particles [first, n) at their blocks' cursors; then every block in ascending id (an insertion
+ * sort: the old particles are in order already), `ascending` as order_by_id leaves it. */
+static void scatter_more(sm_bins *b, const sm_particles *P, size_t first, const sm_step_ctx *c, int T) {
+    uint64_t last = UINT64_MAX;
+    uint32_t slot = 0;
+    for (size_t p = first; p < P->n; p++) {
+        const uint64_t k = particle_key(c, P->x + p * D, c->stencil);
+        if (k != last) {
+            last = k;
+            slot = sm_block_hash_find(&b->pb_hash, k);
+        }
+        b->perm[b->pb[slot].more++] = (uint32_t)p;
+    }
+    uint32_t *perm = b->perm;
+    const uint32_t *id = P->id;
+    const long nb = (long)b->npb;
+#pragma omp parallel for schedule(static) num_threads(T)
+    for (long r = 0; r < nb; r++) {
+        const uint32_t s = b->pb[r].start, e = b->pb[r].end;
+        uint32_t increasing = 1;
+        for (uint32_t i = s + 1; i < e; i++) {
+            const uint32_t p = perm[i], key = id[p];
+            uint32_t j = i;
+            while (j > s && id[perm[j - 1]] > key) {
+                perm[j] = perm[j - 1];
+                j--;
+            }
+            perm[j] = p;
+        }
+        for (uint32_t i = s + 1; i < e; i++) increasing &= perm[i] > perm[i - 1];
+        b->pb[r].ascending = increasing; /* a sort that moved nothing leaves the scatter's increasing order */
+    }
+}
+
+/* The grid blocks the particle blocks touch that are not live yet: merged into the live ones. */
+static sm_status grow_grid(sm_bins *b, sm_grid *g) {
+    if (grow((void **)&b->pairs, &b->pairs_cap, (size_t)NGB * b->npb + 2, sizeof(uint64_t)) != SM_OK) return SM_ERR_NOMEM;
+    size_t k = 0;
+    for (size_t r = 0; r < b->npb; r++) {
+        int bc[3], inside;
+        sm_block_coords(b->pb[r].key, bc);
+        for (int cb = 0; cb < NGB; cb++) {
+            const uint64_t key = neighbour_key(g, bc, cb, &inside);
+            if (inside && sm_block_hash_find(&g->hash, key) == SM_NO_SLOT) b->pairs[k++] = key;
+        }
+    }
+    qsort(b->pairs, k, sizeof(uint64_t), cmp_u64);
+    size_t u = 0;
+    for (size_t i = 0; i < k; i++)
+        if (u == 0 || b->pairs[i] != b->pairs[u - 1]) b->pairs[u++] = b->pairs[i];
+    return sm_grid_add_blocks(g, b->pairs, u);
+}
+
+sm_status SM_FN(sm_bin_more)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c, size_t first) {
+    const int T = c->threads > 0 ? c->threads : 1;
+    if (count_more(b, P, first, c) != SM_OK) return SM_ERR_NOMEM;
+    make_room(b);
+    scatter_more(b, P, first, c, T);
+    if (grow_grid(b, g) != SM_OK) return SM_ERR_NOMEM;
+    link_grid_slots(b, g);
+    if (colour_lists(b) != SM_OK) return SM_ERR_NOMEM;
+    b->basis = basis_of(P, g, c);
+    return SM_OK;
+}
+
+/* ---- The binning ------------------------------------------------------------------------ */
 
 sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c) {
     const size_t n = P->n;

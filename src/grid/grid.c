@@ -90,3 +90,69 @@ void sm_grid_zero(sm_grid *g, int threads) {
         memset(a.force + b * bn * d, 0, bn * d * sizeof(sm_real));
     }
 }
+
+/* The P2G arrays of g (mass, momentum, force) and their values per node. */
+static void p2g_arrays(const sm_grid *g, sm_real *arr[3], size_t per[3]) {
+    const sm_grid_p2g a = sm_grid_p2g_arrays(g);
+    arr[0] = a.mass;
+    arr[1] = a.momentum;
+    arr[2] = a.force;
+    per[0] = 1;
+    per[1] = per[2] = (size_t)g->dim;
+}
+
+/* Merges from the back: old slot i of (okey, src) and new key j end in slot s of (g->key, dst),
+ * largest key first, so that dst may be src (new slots are never below old ones). */
+static void merge_blocks(sm_grid *g, const uint64_t *okey, sm_real *const src[3], sm_real *const dst[3],
+                         const size_t per[3], size_t na, const uint64_t *keys, size_t k) {
+    const size_t bn = (size_t)g->block_nodes;
+    size_t i = na, j = k, s = na + k;
+    while (s > 0) {
+        s--;
+        const int take_new = j > 0 && (i == 0 || keys[j - 1] > okey[i - 1]);
+        for (int q = 0; q < 3; q++) {
+            const size_t len = bn * per[q];
+            if (take_new) memset(dst[q] + s * len, 0, len * sizeof(sm_real));
+            else if (dst[q] != src[q] || s != i - 1) memmove(dst[q] + s * len, src[q] + (i - 1) * len, len * sizeof(sm_real));
+        }
+        g->key[s] = take_new ? keys[--j] : okey[--i];
+    }
+}
+
+sm_status sm_grid_add_blocks(sm_grid *g, const uint64_t *keys, size_t k) {
+    if (k == 0) return SM_OK;
+    const size_t na = g->nactive, total = na + k;
+    sm_real *src[3];
+    size_t per[3];
+    p2g_arrays(g, src, per);
+    if (total <= g->cap) {
+        merge_blocks(g, g->key, src, src, per, na, keys, k);
+    } else { /* into new storage (grid.h: the node arrays hold only the live blocks' values) */
+        sm_grid big = *g;
+        memset(&big.hash, 0, sizeof big.hash);
+        big.key = NULL;
+        big.mass = big.vec[0] = big.vec[1] = big.vec[2] = NULL;
+        big.cap = 0;
+        if (sm_grid_reserve(&big, total) != SM_OK) {
+            sm_grid_free(&big);
+            return SM_ERR_NOMEM;
+        }
+        sm_real *dst[3];
+        p2g_arrays(&big, dst, per);
+        uint64_t *okey = g->key;
+        g->key = big.key;
+        merge_blocks(g, okey, src, dst, per, na, keys, k);
+        free(okey);
+        free(g->mass);
+        for (int q = 0; q < 3; q++) free(g->vec[q]);
+        g->mass = big.mass;
+        for (int q = 0; q < 3; q++) g->vec[q] = big.vec[q];
+        g->cap = big.cap;
+        sm_block_hash_free(&big.hash);
+    }
+    g->nactive = total;
+    if (sm_block_hash_reserve(&g->hash, total) != SM_OK) return SM_ERR_NOMEM;
+    sm_block_hash_clear(&g->hash);
+    for (size_t s = 0; s < total; s++) sm_block_hash_put(&g->hash, g->key[s], (uint32_t)s);
+    return SM_OK;
+}

@@ -130,6 +130,11 @@ size_t sm_grid_bytes(const sm_grid *g);
 sm_status sm_grid_reserve(sm_grid *g, size_t nblocks);
 /* Zeroes what P2G accumulates into (mass, momentum, force) in the live blocks. */
 void sm_grid_zero(sm_grid *g, int threads);
+/* Makes the k blocks keys[] (ascending, none of them live) live too, in their places of the
+ * ascending slot order: the live blocks keep what P2G accumulated in them (mass, momentum, force),
+ * the new ones are zeroed; the hash follows. For a P2G that started before all particles were
+ * binned (bin.h, sm_bin_more). */
+sm_status sm_grid_add_blocks(sm_grid *g, const uint64_t *keys, size_t k);
 
 /* Grid coordinates (i,j,k) of a node index. */
 static inline void sm_grid_node_coords(const sm_grid *g, size_t node, int ijk[3]) {

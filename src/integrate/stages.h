@@ -14,6 +14,8 @@ typedef struct sm_stages {
     int dim;
     /* 2. Bin particles by grid block (grid/bin.h). */
     sm_status (*bin)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c);
+    /* 2. A second batch of particles binned (a distributed step's arrivals, grid/bin.h). */
+    sm_status (*bin_more)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c, size_t first);
     /* 3. P2G: mass, momentum and (explicit) force (transfer/transfer.h). */
     void (*p2g)(const sm_p2g_io *io, const sm_step_ctx *c);
     /* 4-5. Explicit: v* = v^n + dt (f/m + g), collisions (v-bar), friction (v-tilde)

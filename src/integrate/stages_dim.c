@@ -7,6 +7,7 @@
 const sm_stages SM_FN(sm_stages) = {
     .dim = D,
     .bin = SM_FN(sm_bin_particles),
+    .bin_more = SM_FN(sm_bin_more),
     .p2g = SM_FN(sm_p2g),
     .grid_update = SM_FN(sm_grid_update),
     .implicit_solve = SM_FN(sm_implicit_solve),

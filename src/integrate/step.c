@@ -63,7 +63,7 @@ static sm_grid_colliders grid_colliders(const sm_world *w) {
 static sm_p2g_io p2g_io(sm_world *w, int with_force) {
     const sm_particles *P = &w->p;
     sm_p2g_io io = {P->n, P->x, P->v, P->B, P->tau, P->vol0, P->mat, w->mats, &w->bins, w->cache.data, with_force,
-                    sm_grid_p2g_arrays(&w->grid)};
+                    sm_grid_p2g_arrays(&w->grid), NULL};
     return io;
 }
 
@@ -114,19 +114,41 @@ static sm_plasticity_io plasticity_io(sm_world *w, size_t first) {
 
 /* ---- The stages ------------------------------------------------------------------------- */
 
+static sm_status binning_out_of_memory(sm_world *w) {
+    return sm_world_fail(w, SM_ERR_NOMEM, "step %llu: out of memory for the grid and the particle sort",
+                         (unsigned long long)w->steps + 1);
+}
+
 /* 2. Bin particles by grid block; the transfer caches for the threads. */
 static sm_status bin_particles(sm_world *w, const sm_step_ctx *c) {
     if (w->stages->bin(&w->bins, &w->p, &w->grid, c) != SM_OK ||
         sm_transfer_cache_reserve(&w->cache, w->dim, c->threads > 0 ? c->threads : 1) != SM_OK)
-        return sm_world_fail(w, SM_ERR_NOMEM, "step %llu: out of memory for the grid and the particle sort",
-                             (unsigned long long)w->steps + 1);
+        return binning_out_of_memory(w);
     return SM_OK;
 }
 
-/* 3. P2G; the implicit integrator computes forces in its solve. */
-static void p2g(sm_world *w, const sm_step_ctx *c) {
-    const sm_p2g_io io = p2g_io(w, w->def.integrator != SM_INTEGRATOR_IMPLICIT);
+/* 2. The particles from `first` on binned too (a distributed step's arrivals, grid/bin.h). */
+static sm_status bin_more(sm_world *w, const sm_step_ctx *c, size_t first) {
+    return w->stages->bin_more(&w->bins, &w->p, &w->grid, c, first) == SM_OK ? SM_OK : binning_out_of_memory(w);
+}
+
+/* 3. P2G of the blocks in `lists` (NULL: all); the implicit integrator computes forces in its solve. */
+static void p2g(sm_world *w, const sm_step_ctx *c, const sm_block_lists *lists) {
+    sm_p2g_io io = p2g_io(w, w->def.integrator != SM_INTEGRATOR_IMPLICIT);
+    io.lists = lists;
     w->stages->p2g(&io, c);
+}
+
+/* 3. P2G of the inner blocks while the exchange's messages travel: a colour at a time, letting
+ * MPI move them in between. */
+static void p2g_while_exchanging(sm_world *w, const sm_step_ctx *c, const sm_block_lists *inner) {
+    for (int col = 0; col < 8; col++) {
+        if (inner->offset[col] == inner->offset[col + 1]) continue;
+        sm_block_lists one = *inner; /* colour col only */
+        for (int k = 0; k <= 8; k++) one.offset[k] = inner->offset[k <= col ? col : col + 1];
+        p2g(w, c, &one);
+        sm_dist_progress(w);
+    }
 }
 
 /* A step refused before anything outside the grid moved (the CFL check, an unconverged implicit
@@ -237,18 +259,48 @@ static sm_status check_start(sm_world *w, double dt) {
         }                                 \
     } while (0)
 
+/* MPI: the exchange, and with it (*binned) the binning and P2G (2-3) when the step overlaps
+ * them (dist/overlap.c): the particles this rank kept binned and its inner blocks scattered
+ * while the messages travel, then the arrivals binned as a second batch and the other blocks
+ * scattered. */
+static sm_status exchange(sm_world *w, const sm_step_ctx *c, double *t, int *binned) {
+    int overlap = 0;
+    STAGE(w, t, SM_STAGE_EXCHANGE, sm_dist_exchange_begin(w, &overlap));
+    const size_t kept = w->p.n;
+    *binned = overlap && kept > 0;
+    if (*binned) {
+        STAGE(w, t, SM_STAGE_SORT, bin_particles(w, c));
+        const sm_block_lists *inner = sm_dist_inner_blocks(w);
+        if (inner) p2g_while_exchanging(w, c, inner);
+        lap(w, SM_STAGE_P2G, t);
+    }
+    STAGE(w, t, SM_STAGE_EXCHANGE, sm_dist_exchange_finish(w));
+    if (*binned) {
+        STAGE(w, t, SM_STAGE_SORT, bin_more(w, c, kept));
+        p2g(w, c, sm_dist_outer_blocks(w, kept));
+        lap(w, SM_STAGE_P2G, t);
+    }
+    return SM_OK;
+}
+
 /* The particle stages of Algorithm 1 (what a step does when there are particles), after the
  * pre-step check. */
 static sm_status step_particles(sm_world *w, const sm_step_ctx *c) {
     double t = sm_seconds();
-    if (w->dist) STAGE(w, &t, SM_STAGE_EXCHANGE, sm_dist_exchange(w, c)); /* migration, ghosts */
+    int binned = 0;
+    if (w->dist) { /* migration, ghosts */
+        const sm_status st = exchange(w, c, &t, &binned);
+        if (st != SM_OK) return st;
+    }
     /* Always on one rank; a distributed rank may hold none (and skips the stages), except in an
      * implicit step: its solve is collective, every rank takes part (with no grid if need be). */
     const int any = w->p.n > 0 || (w->dist && w->def.integrator == SM_INTEGRATOR_IMPLICIT);
     if (any) {
-        STAGE(w, &t, SM_STAGE_SORT, bin_particles(w, c)); /* 2 */
-        p2g(w, c);                                        /* 3 */
-        lap(w, SM_STAGE_P2G, &t);
+        if (!binned) {
+            STAGE(w, &t, SM_STAGE_SORT, bin_particles(w, c)); /* 2 */
+            p2g(w, c, NULL);                                  /* 3 */
+            lap(w, SM_STAGE_P2G, &t);
+        }
         STAGE(w, &t, SM_STAGE_GRID, grid_velocities(w, c)); /* 4-5 */
     }
     STAGE(w, &t, SM_STAGE_CHECKS, agreed(w, c->dt, any ? sm_health_check_grid(w, c->dt) : SM_OK));

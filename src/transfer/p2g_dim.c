@@ -11,6 +11,9 @@
  * Race-free and deterministic (bin.h): colours one after another, the blocks of a colour split
  * among the threads in contiguous ranges of equal particle counts, the particles of a block in
  * order, each block accumulated into the thread's dense cache and then added into the grid.
+ * A list of blocks (sm_p2g_io.lists) scatters only those: a distributed step scatters its inner
+ * blocks while the exchange's messages travel, then the others (dist/overlap.c says why every
+ * node still sums in colour order).
  *
  * The contribution of particle p to cached node (s0, s1, s2) uses the separable weights:
  *   w0 w1 w2 A + w1 w2 (w0 dp0 Cx + dw0 Vx) + w0 w2 (w1 dp1 Cy + dw1 Vy) + w0 w1 (w2 dp2 Cz + dw2 Vz)
@@ -132,6 +135,8 @@ static inline __attribute__((always_inline)) void p2g_block(const sm_p2g_io *io,
 void SM_FN(sm_p2g)(const sm_p2g_io *io, const sm_step_ctx *c) {
     const int S = c->stencil;
     const sm_bins *bins = io->bins;
+    const uint32_t *list = io->lists ? io->lists->blocks : bins->color_blocks;
+    const uint32_t *offset = io->lists ? io->lists->offset : bins->color_offset;
     vec *caches = (vec *)io->cache;
 #pragma omp parallel num_threads(c->threads)
     {
@@ -139,13 +144,13 @@ void SM_FN(sm_p2g)(const sm_p2g_io *io, const sm_step_ctx *c) {
         sm_thread_team(&t, &T);
         vec *cache = caches + (size_t)t * NCACHE;
         for (int col = 0; col < NCOLORS; col++) {
+            if (offset[col] == offset[col + 1]) continue; /* the same on every thread: no barrier needed */
             long lo, hi;
-            sm_bins_range(bins, bins->color_blocks, (long)bins->color_offset[col], (long)bins->color_offset[col + 1], T,
-                          t, &lo, &hi);
+            sm_bins_range(bins, list, (long)offset[col], (long)offset[col + 1], T, t, &lo, &hi);
             if (S == 3)
-                for (long k = lo; k < hi; k++) p2g_block(io, c, 3, bins->color_blocks[k], cache);
+                for (long k = lo; k < hi; k++) p2g_block(io, c, 3, list[k], cache);
             else
-                for (long k = lo; k < hi; k++) p2g_block(io, c, 4, bins->color_blocks[k], cache);
+                for (long k = lo; k < hi; k++) p2g_block(io, c, 4, list[k], cache);
 #pragma omp barrier
         }
     }

@@ -329,6 +329,8 @@ void sm_dist_free(sm_dist *d) {
     free(d->hist);
     free(d->scratch);
     free(d->lists);
+    free(d->side);
+    free(d->side_key);
     sm_dist_halo_free(d->halo);
     MPI_Comm_free(&d->comm);
     free(d);

@@ -51,12 +51,15 @@ sm_status sm_dist_exchange_finish(struct sm_world *w);
 void sm_dist_progress(struct sm_world *w);
 /* After the kept particles' binning: marks the particle blocks whose P2G needs nothing the
  * messages bring (pb[].early) and returns them by colour, or NULL if there are none
- * (overlap.c). */
-const sm_block_lists *sm_dist_inner_blocks(struct sm_world *w);
-/* After the arrivals' binning (sm_bin_more from `kept`): the blocks still to scatter, by colour.
- * If an arrival joined an inner block or its neighbours (a particle faster than a cell per step,
- * or the test mode), the grid is zeroed, the marks cleared and NULL returned: scatter all. */
+ * (overlap.c); *side: the side arrays their scatter writes its mixed grid blocks to. */
+const sm_block_lists *sm_dist_inner_blocks(struct sm_world *w, sm_grid_p2g *side);
+/* After the arrivals' binning (sm_bin_more from `kept`): the blocks still to scatter, by colour;
+ * before each colour's scatter, sm_dist_replay(w, colour). If an arrival joined an inner block
+ * or its neighbours (a particle faster than a block per step, or test mode 2), the grid is
+ * zeroed, the marks cleared and NULL returned: scatter all, replay nothing. */
 const sm_block_lists *sm_dist_outer_blocks(struct sm_world *w, size_t kept);
+/* Adds the side slots of the inner blocks of this colour into the grid. */
+void sm_dist_replay(struct sm_world *w, int colour);
 /* 1 (default) or 0: whether explicit steps overlap the exchange; 2: overlap and always redo
  * (tests the fallback). Results are the same bits in every mode. */
 void sm_dist_set_overlap(struct sm_world *w, int mode);
@@ -93,7 +96,11 @@ void sm_dist_set_piece_bytes(struct sm_world *w, size_t bytes);
 static inline sm_status sm_dist_exchange_begin(struct sm_world *w, int *overlap) { (void)w; *overlap = 0; return SM_OK; }
 static inline sm_status sm_dist_exchange_finish(struct sm_world *w) { (void)w; return SM_OK; }
 static inline void sm_dist_progress(struct sm_world *w) { (void)w; }
-static inline const sm_block_lists *sm_dist_inner_blocks(struct sm_world *w) { (void)w; return NULL; }
+static inline const sm_block_lists *sm_dist_inner_blocks(struct sm_world *w, sm_grid_p2g *side) {
+    (void)w; (void)side;
+    return NULL;
+}
+static inline void sm_dist_replay(struct sm_world *w, int colour) { (void)w; (void)colour; }
 static inline const sm_block_lists *sm_dist_outer_blocks(struct sm_world *w, size_t kept) { (void)w; (void)kept; return NULL; }
 static inline void sm_dist_set_overlap(struct sm_world *w, int mode) { (void)w; (void)mode; }
 static inline sm_status sm_dist_halo_plan(struct sm_world *w, const struct sm_imp_ranks **out) {

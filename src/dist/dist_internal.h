@@ -43,6 +43,9 @@ struct sm_dist {
     uint32_t *lists;          /* overlap.c: the block lists of sm_dist_inner_blocks / sm_dist_outer_blocks */
     size_t lists_cap;
     sm_block_lists inner, outer;
+    sm_real *side;            /* overlap.c: side arrays, per slot a grid block's mass, momentum and force */
+    uint64_t *side_key;       /* per side slot: the grid block's key << 3 | the contributing block's colour */
+    size_t nside, side_cap;
     sm_dist_halo *halo;       /* NULL until an implicit step */
     sm_dist_stats stats;
 };

@@ -26,6 +26,8 @@ typedef struct sm_pblock {
     uint32_t more;          /* sm_bin_more only: the block's particles of the second batch, then its cursor */
     uint32_t early;         /* 1: scattered by P2G before the second batch (dist/overlap.c); 0 after a full
                                binning, and for the blocks a second batch adds */
+    uint32_t side;          /* bit c: gslot[c] is a slot of the P2G's side arrays, not of the grid
+                               (sm_p2g_io.side; dist/overlap.c sets and clears it) */
 } sm_pblock;
 
 /* Particle blocks grouped by colour: blocks[offset[c] .. offset[c + 1]) are indices into sm_bins.pb of

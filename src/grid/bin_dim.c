@@ -192,7 +192,7 @@ static void publish_blocks(sm_bins *b, size_t nne, int T) {
         b->pb[r].key = pairs[2 * r];
         b->pb[r].start = (uint32_t)(pairs[2 * r + 1] >> 32);
         b->pb[r].end = (uint32_t)pairs[2 * r + 1];
-        b->pb[r].more = b->pb[r].early = 0;
+        b->pb[r].more = b->pb[r].early = b->pb[r].side = 0;
     }
     b->npb = nne;
     sm_block_hash_clear(&b->pb_hash);

@@ -63,7 +63,7 @@ static sm_grid_colliders grid_colliders(const sm_world *w) {
 static sm_p2g_io p2g_io(sm_world *w, int with_force) {
     const sm_particles *P = &w->p;
     sm_p2g_io io = {P->n, P->x, P->v, P->B, P->tau, P->vol0, P->mat, w->mats, &w->bins, w->cache.data, with_force,
-                    sm_grid_p2g_arrays(&w->grid), NULL};
+                    sm_grid_p2g_arrays(&w->grid), NULL, {NULL, NULL, NULL}};
     return io;
 }
 
@@ -132,22 +132,45 @@ static sm_status bin_more(sm_world *w, const sm_step_ctx *c, size_t first) {
     return w->stages->bin_more(&w->bins, &w->p, &w->grid, c, first) == SM_OK ? SM_OK : binning_out_of_memory(w);
 }
 
-/* 3. P2G of the blocks in `lists` (NULL: all); the implicit integrator computes forces in its solve. */
-static void p2g(sm_world *w, const sm_step_ctx *c, const sm_block_lists *lists) {
+/* 3. P2G of the blocks in `lists` (NULL: all), their side slots in `side` (NULL: none); the
+ * implicit integrator computes forces in its solve. */
+static void p2g(sm_world *w, const sm_step_ctx *c, const sm_block_lists *lists, const sm_grid_p2g *side) {
     sm_p2g_io io = p2g_io(w, w->def.integrator != SM_INTEGRATOR_IMPLICIT);
     io.lists = lists;
+    if (side) io.side = *side;
     w->stages->p2g(&io, c);
+}
+
+/* The blocks of colour col of `lists`. */
+static sm_block_lists one_colour(const sm_block_lists *lists, int col) {
+    sm_block_lists one = *lists;
+    for (int k = 0; k <= 8; k++) one.offset[k] = lists->offset[k <= col ? col : col + 1];
+    return one;
 }
 
 /* 3. P2G of the inner blocks while the exchange's messages travel: a colour at a time, letting
  * MPI move them in between. */
-static void p2g_while_exchanging(sm_world *w, const sm_step_ctx *c, const sm_block_lists *inner) {
+static void p2g_while_exchanging(sm_world *w, const sm_step_ctx *c, const sm_block_lists *inner,
+                                 const sm_grid_p2g *side) {
     for (int col = 0; col < 8; col++) {
         if (inner->offset[col] == inner->offset[col + 1]) continue;
-        sm_block_lists one = *inner; /* colour col only */
-        for (int k = 0; k <= 8; k++) one.offset[k] = inner->offset[k <= col ? col : col + 1];
-        p2g(w, c, &one);
+        const sm_block_lists one = one_colour(inner, col);
+        p2g(w, c, &one, side);
         sm_dist_progress(w);
+    }
+}
+
+/* 3. P2G of the other blocks (NULL: all), each colour after the inner blocks' side slots of that
+ * colour (dist/overlap.c). */
+static void p2g_after_exchange(sm_world *w, const sm_step_ctx *c, const sm_block_lists *outer) {
+    if (!outer) {
+        p2g(w, c, NULL, NULL);
+        return;
+    }
+    for (int col = 0; col < 8; col++) {
+        sm_dist_replay(w, col);
+        const sm_block_lists one = one_colour(outer, col);
+        if (outer->offset[col] < outer->offset[col + 1]) p2g(w, c, &one, NULL);
     }
 }
 
@@ -270,14 +293,15 @@ static sm_status exchange(sm_world *w, const sm_step_ctx *c, double *t, int *bin
     *binned = overlap && kept > 0;
     if (*binned) {
         STAGE(w, t, SM_STAGE_SORT, bin_particles(w, c));
-        const sm_block_lists *inner = sm_dist_inner_blocks(w);
-        if (inner) p2g_while_exchanging(w, c, inner);
+        sm_grid_p2g side;
+        const sm_block_lists *inner = sm_dist_inner_blocks(w, &side);
+        if (inner) p2g_while_exchanging(w, c, inner, &side);
         lap(w, SM_STAGE_P2G, t);
     }
     STAGE(w, t, SM_STAGE_EXCHANGE, sm_dist_exchange_finish(w));
     if (*binned) {
         STAGE(w, t, SM_STAGE_SORT, bin_more(w, c, kept));
-        p2g(w, c, sm_dist_outer_blocks(w, kept));
+        p2g_after_exchange(w, c, sm_dist_outer_blocks(w, kept));
         lap(w, SM_STAGE_P2G, t);
     }
     return SM_OK;
@@ -298,7 +322,7 @@ static sm_status step_particles(sm_world *w, const sm_step_ctx *c) {
     if (any) {
         if (!binned) {
             STAGE(w, &t, SM_STAGE_SORT, bin_particles(w, c)); /* 2 */
-            p2g(w, c, NULL);                                  /* 3 */
+            p2g(w, c, NULL, NULL);                            /* 3 */
             lap(w, SM_STAGE_P2G, &t);
         }
         STAGE(w, &t, SM_STAGE_GRID, grid_velocities(w, c)); /* 4-5 */

@@ -11,9 +11,10 @@
  * Race-free and deterministic (bin.h): colours one after another, the blocks of a colour split
  * among the threads in contiguous ranges of equal particle counts, the particles of a block in
  * order, each block accumulated into the thread's dense cache and then added into the grid.
- * A list of blocks (sm_p2g_io.lists) scatters only those: a distributed step scatters its inner
- * blocks while the exchange's messages travel, then the others (dist/overlap.c says why every
- * node still sums in colour order).
+ * A list of blocks (sm_p2g_io.lists) scatters only those, and a block may send some of its grid
+ * blocks' sums to side arrays: a distributed step scatters its inner blocks while the exchange's
+ * messages travel, then the others (dist/overlap.c says why every node still sums in colour
+ * order).
  *
  * The contribution of particle p to cached node (s0, s1, s2) uses the separable weights:
  *   w0 w1 w2 A + w1 w2 (w0 dp0 Cx + dw0 Vx) + w0 w2 (w1 dp1 Cy + dw1 Vy) + w0 w1 (w2 dp2 Cz + dw2 Vz)
@@ -92,13 +93,14 @@ static inline __attribute__((always_inline)) void p2g_splat(int S, const wchunk 
 #endif
 }
 
-/* Adds the cache into the particle block's 2^d grid blocks: lane 0 mass, lanes 1..d momentum,
- * lanes d+1..2d force. */
+/* Adds the cache into the particle block's 2^d grid blocks (or, where its `side` bit says so,
+ * into the side arrays): lane 0 mass, lanes 1..d momentum, lanes d+1..2d force. */
 static inline __attribute__((always_inline)) void p2g_flush(const sm_pblock *pb, const vec *restrict cache,
-                                                           const sm_grid_p2g *g) {
+                                                           const sm_grid_p2g *grid, const sm_grid_p2g *side) {
     for (int cb = 0; cb < NGB; cb++) {
         const uint32_t slot = pb->gslot[cb];
         if (slot == SM_NO_SLOT) continue;
+        const sm_grid_p2g *g = (pb->side >> cb) & 1 ? side : grid;
         for (int l = 0; l < BN; l++) {
             const vec q = cache[cache_index(cb, l)];
             const size_t ni = (size_t)slot * BN + (size_t)l;
@@ -129,7 +131,7 @@ static inline __attribute__((always_inline)) void p2g_block(const sm_p2g_io *io,
         p2g_terms(io, p, apic, dinv, &A, Ce, Ve);
         p2g_splat(S, &wc, j, A, Ce, Ve, cache);
     }
-    p2g_flush(pb, cache, &io->grid);
+    p2g_flush(pb, cache, &io->grid, &io->side);
 }
 
 void SM_FN(sm_p2g)(const sm_p2g_io *io, const sm_step_ctx *c) {

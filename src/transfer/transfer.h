@@ -41,6 +41,8 @@ typedef struct sm_p2g_io {
     int with_force;               /* 0: no stress term (implicit: the solve computes forces) */
     sm_grid_p2g grid;             /* out: mass, momentum, force */
     const sm_block_lists *lists;  /* the blocks to scatter, by colour; NULL: all (the bins' colour lists) */
+    sm_grid_p2g side;             /* out: where a block's grid block c goes when bit c of its `side` is set
+                                     (slot gslot[c] of these arrays; dist/overlap.c) */
 } sm_p2g_io;
 
 /* G2P reads the grid velocities and updates particles: v, B from v-tilde (3.109)-(3.113), x and

@@ -6,6 +6,7 @@
 void sm_bins_free(sm_bins *b) {
     free(b->perm);
     free(b->pb);
+    free(b->pb_tmp);
     sm_block_hash_free(&b->pb_hash);
     free(b->counts);
     free(b->pairs);
@@ -14,7 +15,7 @@ void sm_bins_free(sm_bins *b) {
 }
 
 size_t sm_bins_bytes(const sm_bins *b) {
-    return b->perm_cap * sizeof(uint32_t) + b->pb_cap * sizeof(sm_pblock) +
+    return b->perm_cap * sizeof(uint32_t) + (b->pb_cap + b->pb_tmp_cap) * sizeof(sm_pblock) +
            b->pb_hash.cap * (sizeof(uint64_t) + sizeof(uint32_t)) + b->counts_cap * sizeof(uint32_t) +
            b->pairs_cap * sizeof(uint64_t) + b->color_cap * sizeof(uint32_t);
 }

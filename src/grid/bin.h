@@ -51,6 +51,8 @@ typedef struct sm_bins {
     size_t perm_cap;
     sm_pblock *pb;          /* this step's non-empty particle blocks, ascending key */
     size_t npb, pb_cap;
+    sm_pblock *pb_tmp;      /* sm_bin_more: the blocks it adds, sorted */
+    size_t pb_tmp_cap;
     sm_block_hash pb_hash;  /* key -> index in pb (of the last binning: the next one's guess) */
     uint32_t *counts;       /* per-thread particle counts, then cursors, per block */
     size_t counts_cap;

@@ -22,11 +22,11 @@
  * zeroed.
  *
  * A second batch (sm_bin_more, for a distributed step whose P2G starts before the arrivals):
- * the new particles counted per block (new blocks appended), the blocks sorted by key again,
- * each block's stretch of perm moved up to make room (from the last block down, so nothing is
- * overwritten), the new particles scattered after the old ones and each block put in id order;
- * the new grid blocks merged into the live ones (grid.c, sm_grid_add_blocks: the values of the
- * others kept), then slots and colours as in 4b and 5. */
+ * the new particles counted per block (new blocks appended, then sorted and merged in), each
+ * block's stretch of perm moved up to make room (from the last block down, so nothing is
+ * overwritten), the new particles scattered after the old ones and the blocks that gained some
+ * put in id order; the new grid blocks merged into the live ones (grid.c, sm_grid_add_blocks:
+ * the values of the others kept), then slots and colours as in 4b and 5. */
 #include "core/dim.h"
 
 #include <string.h>
@@ -389,31 +389,40 @@ static int cmp_pblock(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-/* The blocks in key order again; each block's old particles moved to the front of its new
- * stretch, `more` its cursor for the new ones. New starts never fall below old ones, so moving
- * from the last block down overwrites nothing not yet moved. */
-static void make_room(sm_bins *b) {
-    qsort(b->pb, b->npb, sizeof *b->pb, cmp_pblock);
-    sm_block_hash_clear(&b->pb_hash);
+/* The blocks in key order again (the first `old` are; the ones count_more appended are sorted
+ * and merged in from the back), each block's old particles moved to the front of its new stretch
+ * of perm, `more` its cursor for the new ones. New positions never fall below old ones, so going
+ * from the last block down overwrites nothing not yet moved. The blocks that gain particles go
+ * to b->counts (index, bit 31 set for a block new to the binning); returns how many. */
+static size_t make_room(sm_bins *b, size_t old) {
+    const size_t nnew = b->npb - old;
+    memcpy(b->pb_tmp, b->pb + old, nnew * sizeof *b->pb);
+    qsort(b->pb_tmp, nnew, sizeof *b->pb_tmp, cmp_pblock);
     uint32_t end = 0;
-    for (size_t r = 0; r < b->npb; r++) {
-        sm_block_hash_put(&b->pb_hash, b->pb[r].key, (uint32_t)r);
-        end += b->pb[r].end - b->pb[r].start + b->pb[r].more;
-    }
-    for (size_t r = b->npb; r-- > 0;) {
-        sm_pblock *pb = &b->pb[r];
-        const uint32_t len = pb->end - pb->start, start = end - len - pb->more;
-        memmove(b->perm + start, b->perm + pb->start, len * sizeof *b->perm);
-        pb->more = start + len;
-        pb->start = start;
-        pb->end = end;
+    for (size_t r = 0; r < b->npb; r++) end += b->pb[r].end - b->pb[r].start + b->pb[r].more;
+    size_t i = old, j = nnew, touched = 0;
+    for (size_t k = b->npb; k-- > 0;) {
+        const int take_new = j > 0 && (i == 0 || b->pb_tmp[j - 1].key > b->pb[i - 1].key);
+        sm_pblock pb = take_new ? b->pb_tmp[--j] : b->pb[--i];
+        const uint32_t len = pb.end - pb.start, start = end - len - pb.more;
+        memmove(b->perm + start, b->perm + pb.start, len * sizeof *b->perm);
+        if (pb.more) b->counts[touched++] = (uint32_t)k | (take_new ? 1u << 31 : 0);
+        pb.more = start + len;
+        pb.start = start;
+        pb.end = end;
+        b->pb[k] = pb;
         end = start;
     }
+    sm_block_hash_clear(&b->pb_hash);
+    for (size_t r = 0; r < b->npb; r++) sm_block_hash_put(&b->pb_hash, b->pb[r].key, (uint32_t)r);
+    return touched;
 }
 
-/* Particles [first, n) at their blocks' cursors; then every block in ascending id (an insertion
- * sort: the old particles are in order already), `ascending` as order_by_id leaves it. */
-static void scatter_more(sm_bins *b, const sm_particles *P, size_t first, const sm_step_ctx *c, int T) {
+/* Particles [first, n) at their blocks' cursors; then each block that gained some in ascending id
+ * (an insertion sort: its old particles are in order already), `ascending` as order_by_id leaves
+ * it. */
+static void scatter_more(sm_bins *b, const sm_particles *P, size_t first, const sm_step_ctx *c, size_t touched,
+                         int T) {
     uint64_t last = UINT64_MAX;
     uint32_t slot = 0;
     for (size_t p = first; p < P->n; p++) {
@@ -426,10 +435,11 @@ static void scatter_more(sm_bins *b, const sm_particles *P, size_t first, const 
     }
     uint32_t *perm = b->perm;
     const uint32_t *id = P->id;
-    const long nb = (long)b->npb;
+    const long nt = (long)touched;
 #pragma omp parallel for schedule(static) num_threads(T)
-    for (long r = 0; r < nb; r++) {
-        const uint32_t s = b->pb[r].start, e = b->pb[r].end;
+    for (long t = 0; t < nt; t++) {
+        sm_pblock *pb = &b->pb[b->counts[t] & ~(1u << 31)];
+        const uint32_t s = pb->start, e = pb->end;
         uint32_t increasing = 1;
         for (uint32_t i = s + 1; i < e; i++) {
             const uint32_t p = perm[i], key = id[p];
@@ -441,17 +451,19 @@ static void scatter_more(sm_bins *b, const sm_particles *P, size_t first, const 
             perm[j] = p;
         }
         for (uint32_t i = s + 1; i < e; i++) increasing &= perm[i] > perm[i - 1];
-        b->pb[r].ascending = increasing; /* a sort that moved nothing leaves the scatter's increasing order */
+        pb->ascending = increasing; /* a sort that moved nothing leaves the scatter's increasing order */
     }
 }
 
-/* The grid blocks the particle blocks touch that are not live yet: merged into the live ones. */
-static sm_status grow_grid(sm_bins *b, sm_grid *g) {
-    if (grow((void **)&b->pairs, &b->pairs_cap, (size_t)NGB * b->npb + 2, sizeof(uint64_t)) != SM_OK) return SM_ERR_NOMEM;
+/* The grid blocks that the blocks new to the binning touch and that are not live yet: merged into
+ * the live ones. */
+static sm_status grow_grid(sm_bins *b, sm_grid *g, size_t touched) {
+    if (grow((void **)&b->pairs, &b->pairs_cap, (size_t)NGB * touched + 2, sizeof(uint64_t)) != SM_OK) return SM_ERR_NOMEM;
     size_t k = 0;
-    for (size_t r = 0; r < b->npb; r++) {
+    for (size_t t = 0; t < touched; t++) {
+        if (!(b->counts[t] >> 31)) continue;
         int bc[3], inside;
-        sm_block_coords(b->pb[r].key, bc);
+        sm_block_coords(b->pb[b->counts[t] & ~(1u << 31)].key, bc);
         for (int cb = 0; cb < NGB; cb++) {
             const uint64_t key = neighbour_key(g, bc, cb, &inside);
             if (inside && sm_block_hash_find(&g->hash, key) == SM_NO_SLOT) b->pairs[k++] = key;
@@ -466,10 +478,14 @@ static sm_status grow_grid(sm_bins *b, sm_grid *g) {
 
 sm_status SM_FN(sm_bin_more)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c, size_t first) {
     const int T = c->threads > 0 ? c->threads : 1;
-    if (count_more(b, P, first, c) != SM_OK) return SM_ERR_NOMEM;
-    make_room(b);
-    scatter_more(b, P, first, c, T);
-    if (grow_grid(b, g) != SM_OK) return SM_ERR_NOMEM;
+    const size_t old = b->npb;
+    if (count_more(b, P, first, c) != SM_OK ||
+        grow((void **)&b->pb_tmp, &b->pb_tmp_cap, b->npb - old + 1, sizeof *b->pb_tmp) != SM_OK ||
+        grow((void **)&b->counts, &b->counts_cap, b->npb + 1, sizeof(uint32_t)) != SM_OK)
+        return SM_ERR_NOMEM;
+    const size_t touched = make_room(b, old);
+    scatter_more(b, P, first, c, touched, T);
+    if (grow_grid(b, g, touched) != SM_OK) return SM_ERR_NOMEM;
     link_grid_slots(b, g);
     if (colour_lists(b) != SM_OK) return SM_ERR_NOMEM;
     b->basis = basis_of(P, g, c);

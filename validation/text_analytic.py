@@ -110,13 +110,51 @@ one, g sin θ Δt M / m_contact, without static_friction_sticks): it would halve
 max Δt 1e-5 s instead of 2e-5 s the aligned block still slid 62 mm by 1.2 s (68 mm). It slides
 under APIC only: with PIC (which damps the block's ringing) the same aligned block moves 0.072 mm
 in all and holds (3e-12 m/s at 1.2 s). So it is the release transient of "the static creep" below;
-what keeps it going on a grid-aligned plane under APIC is not found yet (the next step: the contact
-nodes' stick/slip states there).
+what keeps it going on a grid-aligned plane under APIC is a vibration that the contact there does
+not damp (below: "why the aligned block keeps sliding").
 **Correction:** until commit dd0d68e the aligned block's
 upper end (x = 2.0 m) lay inside the domain wall (2 cells inside the domain's face, at 1.98 m),
 which held the static aligned block; the by-hand aligned rows of "the fit window" below carry that
 wall contact (docs/experiments/incline_window.c's default geometry still has it; its EXTRA argument
 gives the table's).
+
+**Why the aligned block keeps sliding** (measured 2026-12-07 at 70303ae with
+docs/experiments/incline_vibration.c and its node hook, the double build, max Δt 2e-5 s, μ = 0.7,
+separating plane). Not a steady shortfall of friction but a vibration it pumps: the block bounces
+and rocks at about 20 Hz (normal velocity of its centre of mass ±24 mm/s, rotation ±0.3 rad/s),
+and the energy of its motion about the centre of mass grows from 2e-3 J to 0.4–1.1e-2 J, where on
+the tilted plane it falls to 1e-11 J by 0.3 s. Over a cycle the normal force swings from 34 to
+310 N (M g cos θ = 170 N): in the light phase (about 4 ms) every contact node slips at ratio 0.70
+but delivers only 24–34 N of friction against 98 N of gravity along the slope, and the block
+speeds up (42 → 63 mm/s); in the heavy phase 12–17 of about 30 contact nodes stick with capacity
+left and the ratio falls to 0.42–0.64; averaged over a cycle friction equals gravity along the
+slope (ratio 0.58 = tan θ), so the block neither stops nor speeds up. A quiet block holds: released
+with μ = 2 and switched to μ = 0.7 at 0.6 s, once at rest, it moved 0.06 mm (separating) and
+0.02 mm (slip). Why only on the grid line: the node row on the plane (φ = 0) is a contact row
+carrying about 69 % of the bottom particle layer's mass (the particles sit 0.25 dx above it) and
+clamps that layer's normal motion, so the contact absorbs almost none of the vibration — a block
+kicked on level ground kept 2.8e-5 J of 1.04e-2 J after 0.3 s with the ground on a grid line,
+1.9e-6, 2.5e-9 and 8.7e-10 J with it 0.25, 0.5 and 0.75 cells higher; the ground 1e-6 m below the
+grid line (its nodes just outside) let the block slide 6.5 mm and stop. A separating plane also
+ratchets the block up: a node on or in the plane stops every motion towards it, even where the
+material above has lifted off, so the vibrating bottom layer climbs from 0.27 to 0.88 dx above
+the plane in 1.2 s (the centre of mass rises 6.8 mm). At dx/4 the aligned block runs away (234 mm
+by 1.2 s) where the tilted one slides 9.8 mm and stops; at dx/2 both slide and stop (28.2 and
+20.3 mm). Ruled out: FLIP 0.95 / 0.99 (22.3 / 28.4 mm by 0.6 s against 30.0), a release touching
+the plane (28.3 mm), 9 particles per cell (30.0 mm), the nodes inside the collider (row −1 carries
+1 % of the normal impulse at 0.3 s); μ = 1.0 still slides (22.3 mm), μ = 2.0 holds (0.23 mm). A
+cure would have the contact know where the material is (its distance from the plane carried to
+the nodes in P2G), not where the node is. A rule change tried with it, the material moving with
+the post-friction velocity at every contact node (v-bar = v-tilde, not only where friction
+sticks: docs/experiments/friction-moves-material.patch), does not stop this slide (66.7 mm by
+1.2 s against 68.0) but removes a time-step instability: a block at rest on test_incline's slip
+plane (μ = 0.7), released there with μ = 2 and switched to 0.7, slid 29.3 mm at elastic_cfl 0.65
+and 29.1 mm at 0.7 with the rule of the program, 0.05 mm at 0.7 with the change, and test_incline's
+creep at 0.7 fell from 25.6 to 15.6 mm in 1 s (still above its 10 mm bound, so elastic_cfl stays
+at 0.5). It is not in the program: it changes every scene with friction (final kinetic energies by
+up to 0.3 %, elastic energies by up to 4 % in tests/same_results), and across ranks the implicit
+solve would have to refresh v-bar as it does v-tilde (test_mpi's implicit runs differ from one
+rank's without that).
 
 Near the threshold the friction the grid delivers depends on how the normal support is spread over
 the contact nodes: the per-node Coulomb rule (3.102 applied node by node, as the thesis and the peers

@@ -292,7 +292,13 @@ static sm_status exchange(sm_world *w, const sm_step_ctx *c, double *t, int *bin
     const size_t kept = w->p.n;
     *binned = overlap && kept > 0;
     if (*binned) {
-        STAGE(w, t, SM_STAGE_SORT, bin_particles(w, c));
+        const sm_status st = bin_particles(w, c);
+        lap(w, SM_STAGE_SORT, t);
+        if (st != SM_OK) { /* the messages are received all the same: no rank is left waiting */
+            w->failed = 1;
+            sm_dist_exchange_finish(w);
+            return st;
+        }
         sm_grid_p2g side;
         const sm_block_lists *inner = sm_dist_inner_blocks(w, &side);
         if (inner) p2g_while_exchanging(w, c, inner, &side);

@@ -1119,6 +1119,51 @@ static void test_collide_among(void) {
     CHECK(wall_reached > 0 && wall_reached < flagged);
 }
 
+/* sm_collider_phi_box (the G2P projection's cull): a lower bound of phi over the box, for a
+ * turned, moved half-space (exact: a corner attains it), a box shape and a union, 2D and 3D. */
+static void test_phi_box(void) {
+    unsigned long long rng = 99;
+    double worst_gap = 0.0; /* half-space: bound minus the smallest phi at the corners */
+    for (int dim = 2; dim <= 3; dim++)
+        for (int kind = 0; kind < 3; kind++) {
+            sm_collider_def d = sm_collider_def_default();
+            d.shapes[0] = sm_shape_default(kind == 1 ? SM_SHAPE_BOX : SM_SHAPE_HALFSPACE);
+            set3(d.shapes[0].normal, 0.3, 1.0, dim == 3 ? -0.4 : 0.0);
+            set3(d.shapes[0].center, 0.1, 0.2, 0.0);
+            set3(d.shapes[0].half_extent, 0.3, 0.2, 0.25);
+            d.shape_count = kind == 2 ? 2 : 1;
+            if (kind == 2) {
+                d.shapes[1] = sm_shape_default(SM_SHAPE_SPHERE);
+                set3(d.shapes[1].center, -0.4, 0.5, 0.0);
+                d.shapes[1].radius = 0.3;
+            }
+            set3(d.pose.position, 0.2, -0.3, dim == 3 ? 0.1 : 0.0);
+            quat_axis_angle(dim == 3 ? 1 : 0, dim == 3 ? 1 : 0, 1, 0.4, d.pose.rotation);
+            sm_collider c;
+            sm_collider_init(&c, &d);
+            for (int k = 0; k < 200; k++) {
+                double ctr[3] = {0, 0, 0}, half[3] = {0, 0, 0};
+                for (int a = 0; a < dim; a++) {
+                    ctr[a] = sm_test_uniform(&rng, -1.0, 1.0);
+                    half[a] = sm_test_uniform(&rng, 0.0, 0.3);
+                }
+                const double bound = sm_collider_phi_box(&c, dim, 1, ctr, half);
+                double lowest = INFINITY;
+                for (int q = 0; q < 64; q++) { /* corners, then random points */
+                    double x[3] = {0, 0, 0};
+                    for (int a = 0; a < dim; a++)
+                        x[a] = ctr[a] + half[a] * (q < (1 << dim) ? ((q >> a) & 1 ? 1.0 : -1.0) : sm_test_uniform(&rng, -1.0, 1.0));
+                    const double phi = sm_collider_phi(&c, dim, 1, x, NULL);
+                    CHECK(phi >= bound - 1e-12);
+                    if (q < (1 << dim) && phi < lowest) lowest = phi;
+                }
+                if (kind == 0 && fabs(lowest - bound) > worst_gap) worst_gap = fabs(lowest - bound);
+            }
+        }
+    printf("phi over a box: the bound holds at every point tried; half-space: |bound - lowest corner| <= %.3g\n", worst_gap);
+    CHECK(worst_gap < 1e-12);
+}
+
 int main(void) {
     test_lipschitz();
     test_defaults();
@@ -1134,6 +1179,7 @@ int main(void) {
     test_collide_sm_real();
     test_friction();
     test_collide_among();
+    test_phi_box();
     printf("gradients: worst |fd - grad| %.3g, worst ||grad| - 1| %.3g\n", worst_fd, worst_unit);
     return sm_test_summary("test_collide");
 }

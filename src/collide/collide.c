@@ -365,6 +365,17 @@ double sm_collider_phi(const sm_collider *c, int dim, int which, const double x[
     return best;
 }
 
+double sm_collider_phi_box(const sm_collider *c, int dim, int which, const double ctr[3], const double half[3]) {
+    double g[3], r2 = 0, slack = 0;
+    const double phi = sm_collider_phi(c, dim, which, ctr, g);
+    const int linear = c->def.shape_count == 1 && c->def.shapes[0].kind == SM_SHAPE_HALFSPACE;
+    for (int a = 0; a < dim; a++) {
+        r2 += half[a] * half[a];
+        slack += fabs(g[a]) * half[a];
+    }
+    return phi - (linear ? slack : c->lip * sqrt(r2));
+}
+
 /* The deformation velocity (world frame) an animated mesh adds at world point x at t^{n+1}: that
  * of the shape nearest x (smallest phi) if it is an animated mesh, else 0. */
 static void animated_velocity(const sm_collider *c, int dim, const double x[3], double add[3]) {

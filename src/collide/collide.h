@@ -49,6 +49,12 @@ void sm_collider_end_step(sm_collider *c);
  * In 2D (dim == 2) only x, y are used and grad[2] = 0. */
 double sm_collider_phi(const sm_collider *c, int dim, int which, const double x[3], double grad[3]);
 
+/* A lower bound of the signed distance over the axis-aligned box ctr +- half (pose `which`):
+ * exact (to rounding) for a collider of one half-space, whose phi is linear, phi(ctr) - sum
+ * |grad_a| half_a; otherwise the Lipschitz bound phi(ctr) - lip |half|. For culling: where it
+ * is > 0, no point of the box is inside. */
+double sm_collider_phi_box(const sm_collider *c, int dim, int which, const double ctr[3], const double half[3]);
+
 /* Velocity of the collider's material at world point x (rigid: v + w x (x - origin1)), plus, for
  * a collider with an animated mesh nearest x, that mesh's surface velocity at t^{n+1}. */
 void sm_collider_velocity(const sm_collider *c, int dim, const double x[3], double vel[3]);

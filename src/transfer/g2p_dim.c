@@ -165,20 +165,17 @@ static inline __attribute__((always_inline)) void g2p_update(const sm_g2p_io *io
 
 /* Safety net: a particle that ends a step inside a collider is put back on its surface along
  * the gradient (positions only). The grid-level constraints keep this rare and small; it is
- * counted in sm_diagnostics.projected_particles. Only colliders that may reach the block's
- * bounding box (its signed distance at the centre, lip-Lipschitz: collide.h) are evaluated per
- * particle. */
+ * counted in sm_diagnostics.projected_particles. Only colliders that may reach into the block's
+ * bounding box (sm_collider_phi_box: exact for a half-space, the Lipschitz bound otherwise) are
+ * evaluated per particle: a block resting on the ground is not. */
 static size_t project_block(const sm_g2p_io *io, const sm_pblock *pb, const g2p_acc *acc) {
-    double ctr[3] = {0, 0, 0}, R2 = 0;
-    for (int a = 0; a < D; a++) {
-        ctr[a] = 0.5 * (acc->lo[a] + acc->hi[a]);
-        double h = 0.5 * (acc->hi[a] - acc->lo[a]);
-        R2 += h * h;
-    }
-    const double R = sqrt(R2) + 1e-6 * (1.0 + fabs(ctr[0]) + fabs(ctr[1]) + fabs(ctr[2]));
+    double ctr[3] = {0, 0, 0}, half[3] = {0, 0, 0};
+    for (int a = 0; a < D; a++) ctr[a] = 0.5 * (acc->lo[a] + acc->hi[a]);
+    const double slack = 1e-6 * (1.0 + fabs(ctr[0]) + fabs(ctr[1]) + fabs(ctr[2])); /* rounding of ctr, half */
+    for (int a = 0; a < D; a++) half[a] = 0.5 * (acc->hi[a] - acc->lo[a]) + slack;
     size_t projected = 0;
     for (int b = 0; b < io->ncolliders; b++) {
-        if (sm_collider_phi(&io->colliders[b], D, 1, ctr, NULL) > io->colliders[b].lip * R) continue;
+        if (sm_collider_phi_box(&io->colliders[b], D, 1, ctr, half) > 0) continue;
         for (uint32_t idx = pb->start; idx < pb->end; idx++) {
             const size_t p = io->bins->perm[idx];
             double xp[3] = {0, 0, 0}, gr[3];

@@ -203,23 +203,28 @@ static void publish_blocks(sm_bins *b, size_t nne, int T) {
  * already, so a block's particles are a few runs sorted by id (the previous block order): an
  * insertion sort costs about one comparison per particle. A block the sort did not change keeps
  * the scatter's increasing indices (`ascending`: the transfers' cheap test for a run). */
+/* perm[s..e) in ascending id (an insertion sort); returns 1 if it moved anything. */
+static uint32_t sort_by_id(uint32_t *perm, const uint32_t *id, uint32_t s, uint32_t e) {
+    uint32_t moved = 0;
+    for (uint32_t i = s + 1; i < e; i++) {
+        const uint32_t p = perm[i], key = id[p];
+        uint32_t j = i;
+        while (j > s && id[perm[j - 1]] > key) {
+            perm[j] = perm[j - 1];
+            j--;
+        }
+        perm[j] = p;
+        moved |= j != i;
+    }
+    return moved;
+}
+
 static void order_by_id(sm_bins *b, const uint32_t *id, int T) {
     uint32_t *perm = b->perm;
     const long nb = (long)b->npb;
 #pragma omp parallel for schedule(static) num_threads(T)
     for (long r = 0; r < nb; r++) {
-        const uint32_t s = b->pb[r].start, e = b->pb[r].end;
-        uint32_t moved = 0;
-        for (uint32_t i = s + 1; i < e; i++) {
-            const uint32_t p = perm[i], key = id[p];
-            uint32_t j = i;
-            while (j > s && id[perm[j - 1]] > key) {
-                perm[j] = perm[j - 1];
-                j--;
-            }
-            perm[j] = p;
-            moved |= j != i;
-        }
+        const uint32_t moved = sort_by_id(perm, id, b->pb[r].start, b->pb[r].end);
         b->pb[r].ascending = !moved; /* the scatter's order increases; any move breaks it */
     }
 }
@@ -440,18 +445,10 @@ static void scatter_more(sm_bins *b, const sm_particles *P, size_t first, const 
     for (long t = 0; t < nt; t++) {
         sm_pblock *pb = &b->pb[b->counts[t] & ~(1u << 31)];
         const uint32_t s = pb->start, e = pb->end;
-        uint32_t increasing = 1;
-        for (uint32_t i = s + 1; i < e; i++) {
-            const uint32_t p = perm[i], key = id[p];
-            uint32_t j = i;
-            while (j > s && id[perm[j - 1]] > key) {
-                perm[j] = perm[j - 1];
-                j--;
-            }
-            perm[j] = p;
-        }
+        sort_by_id(perm, id, s, e);
+        uint32_t increasing = 1; /* (the old particles may have been moved by the first binning's sort) */
         for (uint32_t i = s + 1; i < e; i++) increasing &= perm[i] > perm[i - 1];
-        pb->ascending = increasing; /* a sort that moved nothing leaves the scatter's increasing order */
+        pb->ascending = increasing;
     }
 }
 

@@ -12,6 +12,8 @@
  *   6       G2P: v, B from v-tilde; x, F^E-hat from v-bar (transfer/g2p_dim.c);
  *   7       plasticity and hardening, then tau for the next P2G (material/plasticity_dim.c);
  *   8       emitters add particles (particles/emit.c).
+ * On MPI ranks the exchange of particles comes before 2 (dist/exchange.c); an explicit step
+ * overlaps it with 2-3 for the rank's inner blocks (exchange below, dist/overlap.c).
  * The health checks (health.c) run before the step, after the grid update and at its end. Each
  * stage gets its own argument struct, made here from the world (*_io below): exactly the arrays
  * it reads and writes, named for what they hold (grid.h's lifetime table). Every stage is timed

@@ -56,11 +56,11 @@ static void initial_guess(const sm_implicit_sys *s) {
     sm_real *guess = ws->dz, *residual = ws->y;
     SM_FN(sm_imp_force_increment)(s, ws->vn, ws->z);
     SM_FN(sm_imp_collide)(s, ws->z);
-    const double r_explicit = SM_FN(sm_imp_residual_norm2)(s, ws->z, residual);
+    const double r_explicit = SM_FN(sm_imp_residual_norm2)(s, ws->z, residual, 0);
     for (size_t l = 0; l < s->nodes; l++)
         for (int a = 0; a < D; a++) guess[l * D + a] = ws->mass[l] > 0 ? ws->vn[l * D + a] + dt * s->c->gravity[a] : 0;
     SM_FN(sm_imp_collide)(s, guess);
-    if (SM_FN(sm_imp_residual_norm2)(s, guess, residual) < r_explicit) memcpy(ws->z, guess, s->nodes * D * sizeof(sm_real));
+    if (SM_FN(sm_imp_residual_norm2)(s, guess, residual, 0) < r_explicit) memcpy(ws->z, guess, s->nodes * D * sizeof(sm_real));
     SM_FN(sm_imp_collide)(s, ws->z);
 }
 
@@ -140,21 +140,25 @@ static int gmres(const sm_implicit_sys *s, const sm_real *b, sm_real *x, int K, 
 
 /* z = GRID_COLLISIONS(z0 + step dz), step = 1, 1/2, ... until the residual norm falls below
  * a_norm (or tol); the sixth try is taken as it is. z0 is kept in the first Krylov vector (the
- * basis is not needed any more). */
-static void line_search(const sm_implicit_sys *s, double a_norm, double tol, double msum) {
+ * basis is not needed any more). Each trial's residual is evaluated as a Newton iteration
+ * would (with the precompute, into ws->y, free once GMRES has read its right-hand side), so an
+ * accepted trial's is the next iteration's: returns 1 then, 0 if the sixth try was taken
+ * without an evaluation. */
+static int line_search(const sm_implicit_sys *s, double a_norm, double tol, double msum) {
     sm_implicit_ws *ws = s->ws;
     const size_t N = s->nodes * D;
-    sm_real *z0 = ws->krylov, *trial_residual = ws->aux;
+    sm_real *z0 = ws->krylov;
     memcpy(z0, ws->z, N * sizeof(sm_real));
     double step = 1;
     for (int ls = 0; ls < 6; ls++) {
         for (size_t k = 0; k < N; k++) ws->z[k] = z0[k] + (sm_real)step * ws->dz[k];
         SM_FN(sm_imp_collide)(s, ws->z);
         if (ls == 5) break;
-        double an = sqrt(SM_FN(sm_imp_residual_norm2)(s, ws->z, trial_residual) / (msum > 0 ? msum : 1));
-        if (an < a_norm || an < tol) break;
+        double an = sqrt(SM_FN(sm_imp_residual_norm2)(s, ws->z, ws->y, 1) / (msum > 0 ? msum : 1));
+        if (an < a_norm || an < tol) return 1;
         step *= 0.5;
     }
+    return 0;
 }
 
 /* The residual's rounding floor (m/s): a few roundings of sm_real of its terms' RMS. Newton
@@ -169,13 +173,12 @@ static double newton(const sm_implicit_io *io, const sm_implicit_sys *s, double 
     const double dt = s->c->dt, tol = io->newton_tolerance * dt, mnorm = msum > 0 ? msum : 1;
     const size_t N = s->nodes * D;
     sm_real *rhs = ws->y;
-    int it = 0, at_floor = 0;
+    int it = 0, at_floor = 0, evaluated = 0;
     double a_norm = INFINITY;
     for (;; it++) {
-        /* NONLINEAR_FUNCTION at z (already collided), with the Algorithm 8 precompute. */
-        SM_FN(sm_imp_forces)(s, ws->z, 1);
-        SM_FN(sm_imp_residual)(s, ws->z, ws->y);
-        SM_FN(sm_imp_project)(s, ws->y, 1);
+        /* NONLINEAR_FUNCTION at z (already collided), with the Algorithm 8 precompute, unless
+         * the line search has just evaluated it (the same calls: the same bits). */
+        if (!evaluated) (void)SM_FN(sm_imp_residual_norm2)(s, ws->z, ws->y, 1);
         a_norm = sqrt(SM_FN(sm_imp_dot)(s, ws->y, ws->y) / mnorm);
         if (it < (int)(sizeof st->hist / sizeof st->hist[0])) st->hist[it] = a_norm / dt;
         if (it > 0 && !(a_norm < tol)) {
@@ -186,7 +189,7 @@ static double newton(const sm_implicit_io *io, const sm_implicit_sys *s, double 
         for (size_t k = 0; k < N; k++) rhs[k] = -ws->y[k]; /* solve J dz = -y */
         if (io->precondition) SM_FN(sm_imp_precond_build)(s);
         st->gmres_total += (uint64_t)gmres(s, rhs, ws->dz, io->gmres_max_iterations, io->gmres_tolerance, io->precondition);
-        line_search(s, a_norm, tol, msum);
+        evaluated = line_search(s, a_norm, tol, msum);
     }
     st->newton_total += (uint64_t)it;
     st->last_iterations = it;
@@ -198,11 +201,12 @@ static double newton(const sm_implicit_io *io, const sm_implicit_sys *s, double 
 }
 
 /* Algorithm 5, lines 3-5: v-bar = z; v* = v^n + FORCE_INCREMENT_VEL(v-bar);
- * dv = GRID_COLLISIONS(v*) - v*; v-tilde = FRICTION(v-bar, dv); into the grid. */
+ * dv = GRID_COLLISIONS(v*) - v*; v-tilde = FRICTION(v-bar, dv); into the grid. Newton's last
+ * evaluation was at z, so ws->force holds the forces at v-bar. */
 static void finish(const sm_implicit_io *io, const sm_implicit_sys *s) {
     sm_implicit_ws *ws = s->ws;
     sm_real *vstar = ws->aux, *vcollided = ws->dz;
-    SM_FN(sm_imp_force_increment)(s, ws->z, vstar);
+    SM_FN(sm_imp_vstar)(s, vstar);
     memcpy(vcollided, vstar, s->nodes * D * sizeof(sm_real));
     SM_FN(sm_imp_collide)(s, vcollided); /* the contacts of this call drive FRICTION */
     SM_FN(sm_grid_friction_after_solve)(&s->colliders, s->grid, s->c, s->nodes, ws->contact, ws->z, vstar,

@@ -102,11 +102,11 @@ void SM_FN(sm_imp_scatter_by_colour)(const sm_implicit_sys *s, sm_imp_particle_s
     }
 }
 
-/* Particle p's M_p grad w_ip into out_i (arg: the matrices M, n x DD). */
-static void scatter_matrix(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb, const int bc[3],
-                           sm_real *out) {
-    const int S = s->c->stencil;
-    const sm_real *M = (const sm_real *)arg + p * DD;
+/* Particle p's M_p grad w_ip into out_i (M: its d x d matrix), for a stencil of S nodes a side
+ * (a constant where inlined: the loops unroll). */
+static inline __attribute__((always_inline)) void scatter_one(const sm_implicit_sys *s, int S, const sm_real *M,
+                                                             size_t p, const sm_pblock *pb, const int bc[3],
+                                                             sm_real *out) {
     weights W;
     kernel_weights(S, s->x + p * D, s->c, bc, &W);
     STENCIL_BEGIN(S, W, pb)
@@ -117,6 +117,14 @@ static void scatter_matrix(const sm_implicit_sys *s, const void *arg, size_t p, 
         out[ni * D + a] += acc;
     }
     STENCIL_END
+}
+
+/* Particle p's M_p grad w_ip into out_i (arg: the matrices M, n x DD). */
+static void scatter_matrix(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb, const int bc[3],
+                           sm_real *out) {
+    const sm_real *M = (const sm_real *)arg + p * DD;
+    if (s->c->stencil == 3) scatter_one(s, 3, M, p, pb, bc, out);
+    else scatter_one(s, 4, M, p, pb, bc, out);
 }
 
 /* out_i = sum_p M_p grad w_ip, with M_p from `mats` (n x DD). */
@@ -234,10 +242,14 @@ void SM_FN(sm_imp_residual)(const sm_implicit_sys *s, const sm_real *z, sm_real 
 }
 
 void SM_FN(sm_imp_force_increment)(const sm_implicit_sys *s, sm_real *z, sm_real *vstar) {
+    SM_FN(sm_imp_forces)(s, z, 0);
+    SM_FN(sm_imp_vstar)(s, vstar);
+}
+
+void SM_FN(sm_imp_vstar)(const sm_implicit_sys *s, sm_real *vstar) {
     const sm_implicit_ws *ws = s->ws;
     const sm_real dt = (sm_real)s->c->dt;
     const sm_real *g = s->c->gravity;
-    SM_FN(sm_imp_forces)(s, z, 0);
     for (size_t l = 0; l < s->nodes; l++)
         for (int a = 0; a < D; a++)
             vstar[l * D + a] = ws->mass[l] > 0 ? ws->vn[l * D + a] + dt * g[a] - dt / ws->mass[l] * ws->force[l * D + a] : 0;
@@ -267,8 +279,8 @@ double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z) {
     return SM_FN(sm_imp_block_sum)(s);
 }
 
-double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, sm_real *z, sm_real *y) {
-    SM_FN(sm_imp_forces)(s, z, 0);
+double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, sm_real *z, sm_real *y, int pre) {
+    SM_FN(sm_imp_forces)(s, z, pre);
     SM_FN(sm_imp_residual)(s, z, y);
     SM_FN(sm_imp_project)(s, y, 1);
     return SM_FN(sm_imp_dot)(s, y, y);

@@ -33,13 +33,14 @@
  *   storage  initial guess                Newton iteration                    finish (Alg. 5, l. 3-5)
  *   mass     node mass m_i (0 where none), the whole step
  *   vn       v^n, the whole step
- *   force    sum_p G_p grad w_ip at the velocities of the last force evaluation
+ *   force    sum_p G_p grad w_ip at the velocities of the last force evaluation (at the finish: v-bar)
  *   z        explicit predictor, then     the iterate (collided)              v-bar = the solution
  *            the better guess
- *   y        the guesses' residuals       residual y(z); negated: GMRES rhs   -
- *   dz       guess v^n + dt g             Newton step (GMRES's solution)      GRID_COLLISIONS(v*)
- *   aux      -                            GMRES: TIMES_DIFF's P x;            v*
+ *   y        the guesses' residuals       residual y(z); negated: GMRES rhs;  -
  *                                         line search: the trial's residual
+ *                                         (the next iteration's if accepted)
+ *   dz       guess v^n + dt g             Newton step (GMRES's solution)      GRID_COLLISIONS(v*)
+ *   aux      -                            GMRES: TIMES_DIFF's P x             v*
  *   krylov   -                            GMRES: K+1 basis vectors;           -
  *                                         line search: z before the step
  *   contact  contacts of the last GRID_COLLISIONS (of z; at the finish, of v*)
@@ -149,8 +150,11 @@ void SM_FN(sm_imp_residual)(const sm_implicit_sys *s, const sm_real *z, sm_real 
 void SM_FN(sm_imp_project)(const sm_implicit_sys *s, sm_real *y, int prune);
 /* vstar = v^n + FORCE_INCREMENT_VEL(z) = v^n + dt g - (dt/m) sum_p G_p(z) grad w. */
 void SM_FN(sm_imp_force_increment)(const sm_implicit_sys *s, sm_real *z, sm_real *vstar);
-/* NONLINEAR_FUNCTION at z (collided): y = the pruned residual; returns sum m |y|^2. */
-double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, sm_real *z, sm_real *y);
+/* The same from the forces the last sm_imp_forces left in ws->force (at its z). */
+void SM_FN(sm_imp_vstar)(const sm_implicit_sys *s, sm_real *vstar);
+/* NONLINEAR_FUNCTION at z (collided): y = the pruned residual; returns sum m |y|^2. With pre,
+ * also Algorithm 8's precompute at z (ws->pp), as a Newton iteration at z needs. */
+double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, sm_real *z, sm_real *y, int pre);
 /* TIMES_DIFF (Algorithm 6) at the last precompute: out = J x. px: scratch for P x; overwrites
  * ws->G with the Hessian products. */
 void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_real *out, sm_real *px);

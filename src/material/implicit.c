@@ -236,8 +236,12 @@ int sm_implicit_diag(int d, const sm_real *sigma, const sm_implicit_material *ma
     return cas;
 }
 
-void sm_implicit_mhat_apply(int d, const sm_implicit_mhat *mhat, const sm_real *T, sm_real *A) {
-    SM_ASSERT(d == 2 || d == 3);
+/* The loops below are written for any d and inlined where d is a constant (sm_implicit_apply),
+ * which unrolls them: the same operations in the same order, so the same bits (no contraction:
+ * -ffp-contract=off). */
+#define SM_INLINE static inline __attribute__((always_inline))
+
+SM_INLINE void mhat_apply(int d, const sm_implicit_mhat *mhat, const sm_real *T, sm_real *A) {
     for (int i = 0; i < d; i++) {
         sm_real s = 0;
         for (int j = 0; j < d; j++) s += mhat->ybar[i * d + j] * T[j * d + j];
@@ -251,6 +255,11 @@ void sm_implicit_mhat_apply(int d, const sm_implicit_mhat *mhat, const sm_real *
     }
 }
 
+void sm_implicit_mhat_apply(int d, const sm_implicit_mhat *mhat, const sm_real *T, sm_real *A) {
+    SM_ASSERT(d == 2 || d == 3);
+    mhat_apply(d, mhat, T, A);
+}
+
 /* ---- small dense helpers (d x d row-major) ------------------------------------------------ */
 
 static void svd_d(int d, const sm_real *F, sm_real *U, sm_real *s, sm_real *V) {
@@ -261,7 +270,7 @@ static void svd_d(int d, const sm_real *F, sm_real *U, sm_real *s, sm_real *V) {
 }
 
 /* C = A B, C = A^T B, C = A B^T (C must not alias A or B). */
-static void mat_mul(int d, const sm_real *A, const sm_real *B, sm_real *C) {
+SM_INLINE void mat_mul(int d, const sm_real *A, const sm_real *B, sm_real *C) {
     for (int i = 0; i < d; i++)
         for (int j = 0; j < d; j++) {
             sm_real s = 0;
@@ -269,7 +278,7 @@ static void mat_mul(int d, const sm_real *A, const sm_real *B, sm_real *C) {
             C[i * d + j] = s;
         }
 }
-static void mat_tmul(int d, const sm_real *A, const sm_real *B, sm_real *C) {
+SM_INLINE void mat_tmul(int d, const sm_real *A, const sm_real *B, sm_real *C) {
     for (int i = 0; i < d; i++)
         for (int j = 0; j < d; j++) {
             sm_real s = 0;
@@ -277,7 +286,7 @@ static void mat_tmul(int d, const sm_real *A, const sm_real *B, sm_real *C) {
             C[i * d + j] = s;
         }
 }
-static void mat_mult(int d, const sm_real *A, const sm_real *B, sm_real *C) {
+SM_INLINE void mat_mult(int d, const sm_real *A, const sm_real *B, sm_real *C) {
     for (int i = 0; i < d; i++)
         for (int j = 0; j < d; j++) {
             sm_real s = 0;
@@ -287,13 +296,13 @@ static void mat_mult(int d, const sm_real *A, const sm_real *B, sm_real *C) {
 }
 
 /* out = U (Mhat : (U^T X W)) W^T. */
-static void apply_full(int d, const sm_real *U, const sm_real *W, const sm_implicit_mhat *mhat,
+SM_INLINE void apply_full(int d, const sm_real *U, const sm_real *W, const sm_implicit_mhat *mhat,
                        const sm_real *X, sm_real *out) {
     /* zeroed: keeps -Wmaybe-uninitialized quiet when SM_ASSERT is compiled out */
     sm_real t1[9] = {0}, t2[9] = {0}, t3[9] = {0};
     mat_tmul(d, U, X, t1);
     mat_mul(d, t1, W, t2);
-    sm_implicit_mhat_apply(d, mhat, t2, t3);
+    mhat_apply(d, mhat, t2, t3);
     mat_mul(d, U, t3, t1);
     mat_mult(d, t1, W, out);
 }
@@ -366,9 +375,14 @@ int sm_implicit_precompute(int d, const sm_real *Fn, sm_real dt, const sm_real *
     return cas;
 }
 
-void sm_implicit_apply(int d, const sm_implicit_particle *p, const sm_real *T1, sm_real *A) {
-    SM_ASSERT(d == 2 || d == 3);
+SM_INLINE void apply_particle(int d, const sm_implicit_particle *p, const sm_real *T1, sm_real *A) {
     sm_real t[9];
     for (int i = 0; i < d * d; i++) t[i] = T1[i];
     apply_full(d, p->U, p->Q, &p->M, t, A);
+}
+
+void sm_implicit_apply(int d, const sm_implicit_particle *p, const sm_real *T1, sm_real *A) {
+    SM_ASSERT(d == 2 || d == 3);
+    if (d == 2) apply_particle(2, p, T1, A);
+    else apply_particle(3, p, T1, A);
 }

@@ -5,8 +5,9 @@
  *
  * Thesis Algorithm 5 (COUPLED_SOLVE), with Algorithm 6 for J and Algorithm 8 for its
  * per-particle precompute:
- *   initial guess: the better (smaller residual) of the explicit predictor
- *     v^n + FORCE_INCREMENT_VEL(v^n) and v^n + dt g, collided;
+ *   initial guess: the explicit predictor v^n + FORCE_INCREMENT_VEL(v^n), collided, where the
+ *     explicit update is stable (c dt <= 0.9 dx, c the largest elastic wave speed); above that
+ *     the better (smaller residual) of it and v^n + dt g, collided;
  *   Newton: y = y(z) pruned; stop when sqrt(sum m |y|^2 / sum m) < newton_tolerance dt (after at
  *     least one step), or when it is below the rounding floor 32 eps sqrt(sum m |terms|^2 / sum m)
  *     (eps of sm_real; the terms z, v^n, dt g, dt f / m of y: counted in floor_stops, so a float
@@ -45,17 +46,23 @@ static double load_grid(const sm_implicit_io *io, const sm_implicit_sys *s) {
     return SM_FN(sm_imp_block_sum)(s);
 }
 
+/* Up to this Courant number of the elastic wave, c dt / dx, the explicit update is stable (0.92
+ * and more: docs/benchmarks.md, "Time-step limit"), and so is its predictor. */
+#define PREDICTOR_COURANT_MAX 0.9
+
 /* ws->z = the initial guess (collided). COUPLED_SOLVE starts from the explicit predictor
- * v^n + FORCE_INCREMENT_VEL(v^n); at time steps well above the explicit limit that predictor is
- * itself unstable (its residual measured 1e8 m/s^2 on an elastic block at 10x the limit, and
- * Newton never recovered), so we start from whichever of it and v^n + dt g has the smaller
- * residual. */
-static void initial_guess(const sm_implicit_sys *s) {
+ * v^n + FORCE_INCREMENT_VEL(v^n), and so do we where the explicit update is stable. Above that
+ * the predictor can itself be unstable (its residual measured 1e8 m/s^2 on an elastic block at
+ * 10x the limit, and Newton never recovered), so there we start from whichever of it and
+ * v^n + dt g has the smaller residual (two more force evaluations; docs/benchmarks.md,
+ * "Implicit, third look", has what else was tried). */
+static void initial_guess(const sm_implicit_io *io, const sm_implicit_sys *s) {
     sm_implicit_ws *ws = s->ws;
     const sm_real dt = (sm_real)s->c->dt;
     sm_real *guess = ws->dz, *residual = ws->y;
     SM_FN(sm_imp_force_increment)(s, ws->vn, ws->z);
     SM_FN(sm_imp_collide)(s, ws->z);
+    if (io->wave_speed * s->c->dt <= PREDICTOR_COURANT_MAX * s->c->pos_dx) return;
     const double r_explicit = SM_FN(sm_imp_residual_norm2)(s, ws->z, residual, 0);
     for (size_t l = 0; l < s->nodes; l++)
         for (int a = 0; a < D; a++) guess[l * D + a] = ws->mass[l] > 0 ? ws->vn[l * D + a] + dt * s->c->gravity[a] : 0;
@@ -230,7 +237,7 @@ sm_status SM_FN(sm_implicit_solve)(const sm_implicit_io *io, const sm_step_ctx *
     if (s.ranks) no_room = s.ranks->max_int(s.ranks->ctx, no_room); /* every rank returns, or none */
     if (no_room) return SM_ERR_NOMEM;
     const double msum = load_grid(io, &s);
-    initial_guess(&s);
+    initial_guess(io, &s);
     int converged = 0;
     const double a_norm = newton(io, &s, msum, &converged);
     if (!isfinite(a_norm)) return SM_ERR_NUMERICAL;

@@ -121,6 +121,7 @@ typedef struct sm_implicit_io {
     int newton_max_iterations, gmres_max_iterations;
     double gmres_tolerance;
     int precondition;            /* def.gmres_preconditioner: 1 block Jacobi, 0 none */
+    double wave_speed;           /* the largest elastic wave speed of the materials, m/s (the initial guess) */
     int may_reject;              /* if Newton does not converge, return without finishing (stats->last_converged
                                     = 0): the caller retries with a smaller dt */
     sm_implicit_stats *stats;

@@ -96,6 +96,7 @@ static sm_implicit_io implicit_io(sm_world *w) {
     io.gmres_max_iterations = w->def.gmres_max_iterations;
     io.gmres_tolerance = w->def.gmres_tolerance;
     io.precondition = w->def.gmres_preconditioner;
+    for (int i = 0; i < w->nmats; i++) io.wave_speed = fmax(io.wave_speed, w->mats[i].wave_speed);
     io.stats = &w->newton;
     return io;
 }

@@ -59,7 +59,7 @@ static double incline_run(int dim, double th_deg, double mu, int setup, sm_colli
     def.dim = dim;
     def.dx = dim == 2 ? 0.01 : 0.02;
     def.max_dt = max_dt;
-    def.domain_max[0] = 2.0 + (extra > 0 ? extra + 0.5 : 0);
+    def.domain_max[0] = 2.5 + extra; /* the aligned block's upper end (1.6 + 0.3 + extra + 0.1) clear of the wall */
     def.domain_max[1] = 1.3 + (tilted ? extra * sin(th) : 0);
     def.domain_max[2] = 0.3;
     /* tilted: plane through p0 with normal n, gravity -y; aligned and shifted: plane y = p0[1],

@@ -9,6 +9,7 @@
 --   phi      friction angle, degrees (default 30); fit: cone_fit name (default triaxial_compression)
 --   base     "sticky" (default, the thesis's ground) or "friction" (Coulomb, mu = base_mu, default 0.5)
 --   kernel, transfer   "quadratic"/"cubic", "apic"/"pic"/"flip"
+--   elastic_cfl        the explicit step's elastic Courant number (default 0.5, the program's)
 --   T        simulated time in units of sqrt(H0/g) (default 5, 8 for a < 1.5: the front stops by about 3)
 --   fps_n    frames per sqrt(H0/g) (default 4)
 --   projection, sticks   sm_world_def's particle_projection / static_friction_sticks (default true)
@@ -37,6 +38,7 @@ local fps = fps_n / tau
 return {
   dim = 2, dx = dx, ppc = P.ppc or 4,
   kernel = P.kernel or "quadratic", transfer = P.transfer or "apic",
+  elastic_cfl = P.elastic_cfl or 0.5,
   particle_projection = (P.projection == nil) and true or P.projection,
   static_friction_sticks = (P.sticks == nil) and true or P.sticks,
   fps = fps, frames = math.ceil(T * fps - 1e-9),

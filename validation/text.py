@@ -461,15 +461,15 @@ def honesty(c):
   (scenes/youngs_modulus.lua, explicit, E = 1e6): its settled centre of mass rises from 0.0891 to
   0.0912 and 0.0939 m as elastic_cfl goes 0.5, 0.25, 0.125 (PIC 0.1176 and FLIP 0.1014 m at 0.5
   against 0.1377 and 0.1115 m at 0.125), and at elastic_cfl 0.5 from 0.0891 to 0.0946 and 0.0980 m
-  as E goes 1e6, 1e7, 1e8. More steps, less spreading. A Coulomb base (μ = 0.5) shows no such
-  trend (n = 12: 3.37, 3.60, 3.27 at 0.5, 0.25, 0.125; n = 24: 4.05, 4.05 at 0.5, 0.25), nor does
-  switching off particle_projection or static_friction_sticks change the sticky base's (n = 12:
-  3.65, 3.15 and 3.60, 3.14 at 0.5, 0.25), which points at the sticky base itself, a likely cause
-  not yet isolated: a node held at rest loses, every step, all the momentum P2G gave it (the
-  particles' whole velocity, not an increment), so the drag the sticky base puts on the layer above
-  it grows with the number of steps instead of being a stress. Measured by hand on commit 17ac394's
-  program (Release; the collapses in float with docs/experiments/collapse_dt.py, the block in
-  double), not by this document's runs.
+  as E goes 1e6, 1e7, 1e8. More steps, less spreading. Switching off particle_projection or
+  static_friction_sticks leaves the trend (2D n = 12: 3.65, 3.15 and 3.60, 3.14 at 0.5, 0.25). A
+  Coulomb base shows it in 3D too (μ = 0.5: 1.53, 1.41; μ = 2: 1.41, 1.28, as the sticky base, at
+  0.5, 0.25), in 2D not clearly (μ = 0.5, n = 12: 3.37, 3.60, 3.27 at 0.5, 0.25, 0.125; n = 24: 4.05,
+  4.05 at 0.5, 0.25). A candidate, not isolated: a base node loses, every step, all the momentum
+  P2G gave it into the base (and, where friction holds, along it) — the particles' velocity share,
+  not an increment —, so the base's drag on the layer above grows with the number of steps instead
+  of being a stress. Measured by hand on commit 17ac394's program (Release; the collapses in float
+  with docs/experiments/collapse_dt.py, the block in double), not by this document's runs.
 """
 
 

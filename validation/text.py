@@ -465,10 +465,13 @@ def honesty(c):
   static_friction_sticks leaves the trend (2D n = 12: 3.65, 3.15 and 3.60, 3.14 at 0.5, 0.25). A
   Coulomb base shows it in 3D too (μ = 0.5: 1.53, 1.41; μ = 2: 1.41, 1.28, as the sticky base, at
   0.5, 0.25), in 2D not clearly (μ = 0.5, n = 12: 3.37, 3.60, 3.27 at 0.5, 0.25, 0.125; n = 24: 4.05,
-  4.05 at 0.5, 0.25). A candidate, not isolated: a base node loses, every step, all the momentum
-  P2G gave it into the base (and, where friction holds, along it) — the particles' velocity share,
-  not an increment —, so the base's drag on the layer above grows with the number of steps instead
-  of being a stress. Measured by hand on commit 17ac394's program (Release; the collapses in float
+  4.05 at 0.5, 0.25). On a frictionless base (2D, n = 12) the front reaches the domain's end in
+  every run, but the column left standing at the end is taller with more steps (height 0.93, 1.01,
+  1.09 at 0.5, 0.25, 0.125), so the bulk flow slows with the step count too, not the base alone.
+  Candidates, not isolated: a base node loses, every step, all the momentum P2G gave it into the
+  base (and, where friction holds, along it) — the particles' velocity share, not an increment —;
+  and each grid-to-particle transfer loses the part of the velocity the grid does not carry. Both
+  act per step, not per second. Measured by hand on commit 17ac394's program (Release; the collapses in float
   with docs/experiments/collapse_dt.py, the block in double), not by this document's runs.
 """
 

@@ -7,7 +7,8 @@ return {
   dim = 2, dx = dx, ppc = 4, elastic_cfl = P.elastic_cfl or 0.5, transfer = P.transfer or "apic",
   fps = 20, frames = 10, gravity = {0, 0},
   domain = { min = {0, 0}, max = {1, 0.6} },
-  materials = { m = { model = P.model or "elastic", density = 2200, E = 3.537e5, nu = 0.3, friction_angle = 30 } },
+  materials = { m = { model = P.model or "elastic", density = 2200, E = 3.537e5, nu = 0.3,
+                       friction_angle = (P.model == "sand") and 30 or nil } },
   objects = {
     { shape = { type = "box", center = {0.35, 0.3}, half_extent = {0.1, 0.1} }, material = "m", velocity = {1, 0} },
     { shape = { type = "box", center = {0.65, 0.3}, half_extent = {0.1, 0.1} }, material = "m", velocity = {-1, 0} },

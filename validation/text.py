@@ -470,8 +470,9 @@ def honesty(c):
   1.09 at 0.5, 0.25, 0.125), so the bulk flow slows with the step count too, not the base alone.
   Without any base (docs/experiments/dt_free_blocks.lua: two blocks meeting head-on at 1 m/s
   each, no gravity, E = 3.5e5) the energy left at 0.5 s, of 88 J, is at 0.5, 0.25, 0.125: sand
-  8.1, 7.6, 6.5 J; elastic 61.4, 56.2, 49.3 J. So the bulk loses more with more steps, plastic or
-  not. Candidates, not isolated: each grid-to-particle transfer loses the part of the velocity the
+  8.1, 7.6, 6.5 J; elastic 61.4, 56.2, 49.3 J (PIC 39.0 and 26.6 J, FLIP 57.6 and 46.6 J at 0.5
+  and 0.125). So the bulk loses more with more steps, plastic or not, and most with the most
+  dissipative transfer. Candidates, not isolated: each grid-to-particle transfer loses the part of the velocity the
   grid does not carry, per step rather than per second; and at a base, a node loses every step
   all the momentum P2G gave it into the base (the particles' velocity share, not an increment).
   Measured by hand on commit 17ac394's program (Release; the collapses in float

@@ -475,8 +475,9 @@ def honesty(c):
   dissipative transfer. Candidates, not isolated: each grid-to-particle transfer loses the part of the velocity the
   grid does not carry, per step rather than per second; and at a base, a node loses every step
   all the momentum P2G gave it into the base (the particles' velocity share, not an increment).
-  Measured by hand on commit 17ac394's program (Release; the collapses in float
-  with docs/experiments/collapse_dt.py, the block in double), not by this document's runs.
+  Measured by hand on commit 17ac394's program (Release; the collapses and the free blocks in
+  float, with docs/experiments/collapse_dt.py and dt_free_blocks.lua; the dropped block in
+  double), not by this document's runs.
 """
 
 

@@ -451,7 +451,8 @@ def honesty(c):
   the grid: the incline's friction cases are off by up to {inc_worst:.1%} of the expected acceleration
   ({inc_n} cases; the frictionless ones within {inc_free:.0e}).
 - **Resolution:** runout and height still move with dx at these resolutions (section 8): the
-  numbers above are for the resolutions stated, not converged values.- **Time step:** at a fixed grid the deposit depends on the time step and does not settle as it
+  numbers above are for the resolutions stated, not converged values.
+- **Time step:** at a fixed grid the deposit depends on the time step and does not settle as it
   shrinks. The 2D collapse at a = 2, n = 12 (section 8's reference) runs out 3.65, 3.15, 2.76, 2.41
   at elastic_cfl = 0.5 (the program's default, used by every run above), 0.25, 0.125, 0.0625 (3,580
   to 28,520 steps; heights 1.11, 1.13, 1.17, 1.23); at n = 24 4.04, 4.05, 3.92 at 0.5, 0.25, 0.125;

@@ -18,21 +18,9 @@ static sm_world *build(int dim, sm_kernel kernel) {
     def.dx = dim == 2 ? 0.01 : 0.03;
     def.kernel = kernel;
     def.threads = 2;
-    sm_world *w = NULL;
-    char err[256];
-    CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_OK);
+    const double c[3] = {0.5, 0.3, 0.5}, h[3] = {0.15, 0.15, 0.12};
+    sm_world *w = sm_test_sand_box(&def, 0.1, c, h);
     if (!w) return NULL;
-    sm_material_def m = sm_material_def_sand();
-    int mat = -1;
-    CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
-    sm_collider_def g = sm_test_ground(0.1);
-    CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
-    sm_shape box = sm_shape_default(SM_SHAPE_BOX);
-    box.center[0] = 0.5, box.center[1] = 0.3, box.center[2] = 0.5;
-    box.half_extent[0] = 0.15, box.half_extent[1] = 0.15, box.half_extent[2] = 0.12;
-    sm_seed_def sd = sm_seed_def_default();
-    sd.material = mat;
-    CHECK(sm_world_seed_shape(w, &box, &sd, NULL) == SM_OK);
     for (int s = 0; s < 40; s++) CHECK(sm_world_step(w, sm_world_next_dt(w, 1.0)) == SM_OK);
     return w;
 }

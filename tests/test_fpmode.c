@@ -26,22 +26,8 @@ static sm_world *build(int threads) {
     def.dim = 3;
     def.dx = 0.04;
     def.threads = threads;
-    sm_world *w = NULL;
-    char err[256];
-    CHECK(sm_world_create(&def, &w, err, sizeof err) == SM_OK);
-    if (!w) return NULL;
-    sm_material_def m = sm_material_def_sand();
-    int mat = -1;
-    CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
-    sm_collider_def g = sm_test_ground(0.2);
-    CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
-    sm_shape box = sm_shape_default(SM_SHAPE_BOX);
-    box.center[0] = 0.5, box.center[1] = 0.45, box.center[2] = 0.5;
-    box.half_extent[0] = 0.12, box.half_extent[1] = 0.2, box.half_extent[2] = 0.12;
-    sm_seed_def sd = sm_seed_def_default();
-    sd.material = mat;
-    CHECK(sm_world_seed_shape(w, &box, &sd, NULL) == SM_OK);
-    return w;
+    const double c[3] = {0.5, 0.45, 0.5}, h[3] = {0.12, 0.2, 0.12};
+    return sm_test_sand_box(&def, 0.2, c, h);
 }
 
 /* Steps w `steps` times, checking after each that the caller's mode is unchanged. */

@@ -75,6 +75,27 @@ static inline sm_collider_def sm_test_ground(double y0) {
     return g;
 }
 
+/* A world of *def with one default sand material seeded in a box (centre c, half extents h; the
+ * z entries only in 3D) resting above sm_test_ground(ground_y); the calls checked, NULL if the
+ * world could not be created. */
+static inline sm_world *sm_test_sand_box(const sm_world_def *def, double ground_y, const double c[3], const double h[3]) {
+    sm_world *w = NULL;
+    char err[256];
+    CHECK(sm_world_create(def, &w, err, sizeof err) == SM_OK);
+    if (!w) return NULL;
+    sm_material_def m = sm_material_def_sand();
+    int mat = -1;
+    CHECK(sm_world_add_material(w, &m, &mat) == SM_OK);
+    sm_collider_def g = sm_test_ground(ground_y);
+    CHECK(sm_world_add_collider(w, &g, NULL) == SM_OK);
+    sm_shape box = sm_shape_default(SM_SHAPE_BOX);
+    for (int a = 0; a < def->dim; a++) box.center[a] = c[a], box.half_extent[a] = h[a];
+    sm_seed_def sd = sm_seed_def_default();
+    sd.material = mat;
+    CHECK(sm_world_seed_shape(w, &box, &sd, NULL) == SM_OK);
+    return w;
+}
+
 /* A growing memory buffer for sm_world_save (sm_write_fn: 0 is success). */
 typedef struct sm_test_membuf {
     unsigned char *data;

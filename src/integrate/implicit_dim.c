@@ -149,9 +149,9 @@ static int gmres(const sm_implicit_sys *s, const sm_real *b, sm_real *x, int K, 
  * a_norm (or tol); the sixth try is taken as it is. z0 is kept in the first Krylov vector (the
  * basis is not needed any more). Each trial's residual is evaluated as a Newton iteration
  * would (with the precompute, into ws->y, free once GMRES has read its right-hand side), so an
- * accepted trial's is the next iteration's: returns 1 then, 0 if the sixth try was taken
- * without an evaluation. */
-static int line_search(const sm_implicit_sys *s, double a_norm, double tol, double msum) {
+ * accepted trial's is the next iteration's: returns its residual norm (m/s) then, -1 if the sixth
+ * try was taken without an evaluation. */
+static double line_search(const sm_implicit_sys *s, double a_norm, double tol, double mnorm) {
     sm_implicit_ws *ws = s->ws;
     const size_t N = s->nodes * D;
     sm_real *z0 = ws->krylov;
@@ -161,11 +161,11 @@ static int line_search(const sm_implicit_sys *s, double a_norm, double tol, doub
         for (size_t k = 0; k < N; k++) ws->z[k] = z0[k] + (sm_real)step * ws->dz[k];
         SM_FN(sm_imp_collide)(s, ws->z);
         if (ls == 5) break;
-        double an = sqrt(SM_FN(sm_imp_residual_norm2)(s, ws->z, ws->y, 1) / (msum > 0 ? msum : 1));
-        if (an < a_norm || an < tol) return 1;
+        const double an = sqrt(SM_FN(sm_imp_residual_norm2)(s, ws->z, ws->y, 1) / mnorm);
+        if (an < a_norm || an < tol) return an;
         step *= 0.5;
     }
-    return 0;
+    return -1;
 }
 
 /* The residual's rounding floor (m/s): a few roundings of sm_real of its terms' RMS. Newton
@@ -180,13 +180,12 @@ static double newton(const sm_implicit_io *io, const sm_implicit_sys *s, double 
     const double dt = s->c->dt, tol = io->newton_tolerance * dt, mnorm = msum > 0 ? msum : 1;
     const size_t N = s->nodes * D;
     sm_real *rhs = ws->y;
-    int it = 0, at_floor = 0, evaluated = 0;
-    double a_norm = INFINITY;
+    int it = 0, at_floor = 0;
+    double a_norm = INFINITY, searched = -1;
     for (;; it++) {
         /* NONLINEAR_FUNCTION at z (already collided), with the Algorithm 8 precompute, unless
          * the line search has just evaluated it (the same calls: the same bits). */
-        if (!evaluated) (void)SM_FN(sm_imp_residual_norm2)(s, ws->z, ws->y, 1);
-        a_norm = sqrt(SM_FN(sm_imp_dot)(s, ws->y, ws->y) / mnorm);
+        a_norm = searched >= 0 ? searched : sqrt(SM_FN(sm_imp_residual_norm2)(s, ws->z, ws->y, 1) / mnorm);
         if (it < (int)(sizeof st->hist / sizeof st->hist[0])) st->hist[it] = a_norm / dt;
         if (it > 0 && !(a_norm < tol)) {
             const double floor = NEWTON_FLOOR_ROUNDINGS * SM_REAL_EPSILON * sqrt(SM_FN(sm_imp_term_scale2)(s, ws->z) / mnorm);
@@ -196,7 +195,7 @@ static double newton(const sm_implicit_io *io, const sm_implicit_sys *s, double 
         for (size_t k = 0; k < N; k++) rhs[k] = -ws->y[k]; /* solve J dz = -y */
         if (io->precondition) SM_FN(sm_imp_precond_build)(s);
         st->gmres_total += (uint64_t)gmres(s, rhs, ws->dz, io->gmres_max_iterations, io->gmres_tolerance, io->precondition);
-        evaluated = line_search(s, a_norm, tol, msum);
+        searched = line_search(s, a_norm, tol, mnorm);
     }
     st->newton_total += (uint64_t)it;
     st->last_iterations = it;

@@ -77,8 +77,7 @@ static void initial_guess(const sm_implicit_io *io, const sm_implicit_sys *s) {
 
 /* GMRES on J x = b, x0 = 0, mass-weighted inner product, basis in ws->krylov (K + 1 vectors),
  * right-preconditioned by M^-1 (ws->pinv) if precond: J M^-1 u = b, x = M^-1 u, the same residual
- * minimised over another subspace. Returns the iterations. Overwrites ws->G (TIMES_DIFF's
- * Hessian products) and ws->pz. */
+ * minimised over another subspace. Returns the iterations. Overwrites ws->pz. */
 static int gmres(const sm_implicit_sys *s, const sm_real *b, sm_real *x, int K, double rtol, int precond) {
     sm_implicit_ws *ws = s->ws;
     const size_t N = s->nodes * D;

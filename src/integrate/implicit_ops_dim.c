@@ -14,8 +14,8 @@
  * gives v* = v^n + dt g - (dt/m) sum_p G_p(z) grad w_ip.
  * Dot products are mass-weighted, summed per live block in node order and then exactly over the
  * blocks (math/xsum.h): bitwise the same for any thread count and, across MPI ranks (each
- * summing the blocks it owns, sm_imp_ranks), for any rank count. Scatters use P2G's colour
- * schedule. */
+ * summing the blocks it owns, sm_imp_ranks), for any rank count. The passes over the particles
+ * (gather, per-particle matrix, scatter) are implicit_pass_dim.c. */
 #include "core/dim.h"
 
 #include <string.h>
@@ -55,138 +55,9 @@ static void refresh(const sm_implicit_sys *s, sm_real *v) {
     if (s->ranks) s->ranks->refresh(s->ranks->ctx, v);
 }
 
-/* Particle p's T = sum_i z_i grad w^T from a grid vector (p of particle block pb). */
-static inline __attribute__((always_inline)) void gather_T(const sm_implicit_sys *s, int S, size_t p,
-                                                          const sm_pblock *pb, const sm_real *z, sm_real *T) {
-    weights W;
-    int bc[3];
-    pblock_origin(pb, bc);
-    kernel_weights(S, s->x + p * D, s->c, bc, &W);
-    for (int k = 0; k < DD; k++) T[k] = 0;
-    STENCIL_BEGIN(S, W, pb)
-    (void)wgt;
-    for (int a = 0; a < D; a++)
-        for (int e = 0; e < D; e++) T[a * D + e] += z[ni * D + a] * gw[e];
-    STENCIL_END
-}
-
-/* Whether particle block pb reaches a grid block this rank owns: across ranks, a ghost block
- * that only reaches other ranks' blocks adds nothing the solve reads, and is skipped. */
-static inline int pblock_needed(const sm_implicit_sys *s, const sm_pblock *pb) {
-    if (!s->ranks) return 1;
-    for (int c = 0; c < (1 << D); c++)
-        if (pb->gslot[c] != SM_NO_SLOT && s->ranks->owned[pb->gslot[c]]) return 1;
-    return 0;
-}
-
-void SM_FN(sm_imp_scatter_by_colour)(const sm_implicit_sys *s, sm_imp_particle_scatter fn, const void *arg,
-                                     sm_real *out) {
-    const sm_bins *bins = s->bins;
-#pragma omp parallel num_threads(s->c->threads)
-    {
-        int th, nt;
-        sm_thread_team(&th, &nt);
-        for (int col = 0; col < NCOLORS; col++) {
-            long lo, hi;
-            sm_bins_range(bins, bins->color_blocks, (long)bins->color_offset[col], (long)bins->color_offset[col + 1], nt,
-                          th, &lo, &hi);
-            for (long t = lo; t < hi; t++) {
-                const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
-                if (!pblock_needed(s, pb)) continue;
-                int bc[3];
-                pblock_origin(pb, bc);
-                for (uint32_t idx = pb->start; idx < pb->end; idx++) fn(s, arg, bins->perm[idx], pb, bc, out);
-            }
-#pragma omp barrier
-        }
-    }
-}
-
-/* Particle p's M_p grad w_ip into out_i (M: its d x d matrix), for a stencil of S nodes a side
- * (a constant where inlined: the loops unroll). */
-static inline __attribute__((always_inline)) void scatter_one(const sm_implicit_sys *s, int S, const sm_real *M,
-                                                             size_t p, const sm_pblock *pb, const int bc[3],
-                                                             sm_real *out) {
-    weights W;
-    kernel_weights(S, s->x + p * D, s->c, bc, &W);
-    STENCIL_BEGIN(S, W, pb)
-    (void)wgt;
-    for (int a = 0; a < D; a++) {
-        sm_real acc = 0;
-        for (int e = 0; e < D; e++) acc += M[a * D + e] * gw[e];
-        out[ni * D + a] += acc;
-    }
-    STENCIL_END
-}
-
-/* Particle p's M_p grad w_ip into out_i (arg: the matrices M, n x DD). */
-static void scatter_matrix(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb, const int bc[3],
-                           sm_real *out) {
-    const sm_real *M = (const sm_real *)arg + p * DD;
-    if (s->c->stencil == 3) scatter_one(s, 3, M, p, pb, bc, out);
-    else scatter_one(s, 4, M, p, pb, bc, out);
-}
-
-/* out_i = sum_p M_p grad w_ip, with M_p from `mats` (n x DD). */
-static void scatter(const sm_implicit_sys *s, const sm_real *mats, sm_real *out) {
-    memset(out, 0, s->nodes * D * sizeof(sm_real));
-    SM_FN(sm_imp_scatter_by_colour)(s, scatter_matrix, mats, out);
-}
-
-/* Per-particle work of a gather pass: particle p of block pb. */
-typedef void (*particle_fn)(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb);
-
-/* fn for every particle, with P2G's static particle split (sm_bins_range): a thread works on
- * the same particles as in the other stages. */
-static void for_particles(const sm_implicit_sys *s, particle_fn fn, const void *arg) {
-    const sm_bins *bins = s->bins;
-    const long nb = (long)bins->npb;
-#pragma omp parallel num_threads(s->c->threads)
-    {
-        int th, nt;
-        long lo, hi;
-        sm_thread_team(&th, &nt);
-        sm_bins_range(bins, NULL, 0, nb, nt, th, &lo, &hi);
-        for (long b = lo; b < hi; b++) {
-            if (!pblock_needed(s, &bins->pb[b])) continue;
-            for (uint32_t i = bins->pb[b].start; i < bins->pb[b].end; i++) fn(s, arg, bins->perm[i], &bins->pb[b]);
-        }
-    }
-}
-
-static inline sm_implicit_material particle_material(const sm_implicit_sys *s, size_t p) {
-    const sm_material_rt *m = &s->mats[s->mat[p]];
-    sm_implicit_material im;
-    im.mu = m->law.mu;
-    im.lambda = m->law.lambda;
-    im.alpha = s->alpha[p];
-    im.plastic = m->law.plastic;
-    return im;
-}
-
-typedef struct {
-    const sm_real *z;
-    int pre;
-} forces_arg;
-
-/* G_p at z (and the precompute if pre) of particle p. */
-static void particle_force(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb) {
-    const forces_arg *fa = arg;
-    sm_implicit_ws *ws = s->ws;
-    const sm_real dt = (sm_real)s->c->dt;
-    sm_real T[DD];
-    if (s->c->stencil == 3) gather_T(s, 3, p, pb, fa->z, T);
-    else gather_T(s, 4, p, pb, fa->z, T);
-    sm_implicit_material im = particle_material(s, p);
-    if (fa->pre) sm_implicit_precompute(D, s->F + p * DD, dt, T, s->vol0[p], &im, &ws->pp[p], ws->G + p * DD);
-    else sm_implicit_force_matrix(D, s->F + p * DD, dt, T, s->vol0[p], &im, ws->G + p * DD);
-}
-
 void SM_FN(sm_imp_forces)(const sm_implicit_sys *s, sm_real *z, int pre) {
     refresh(s, z);
-    const forces_arg fa = {z, pre};
-    for_particles(s, particle_force, &fa);
-    scatter(s, s->ws->G, s->ws->force);
+    SM_FN(sm_imp_particle_pass)(s, pre ? SM_IMP_PASS_PRECOMPUTE : SM_IMP_PASS_FORCE, z, s->ws->force);
 }
 
 void SM_FN(sm_imp_collide)(const sm_implicit_sys *s, sm_real *z) {
@@ -286,22 +157,12 @@ double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, sm_real *z, sm_rea
     return SM_FN(sm_imp_dot)(s, y, y);
 }
 
-/* The Hessian product of particle p at the projected direction px (arg), in G's place. */
-static void particle_hessian(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb) {
-    sm_implicit_ws *ws = s->ws;
-    sm_real T1[DD];
-    if (s->c->stencil == 3) gather_T(s, 3, p, pb, arg, T1);
-    else gather_T(s, 4, p, pb, arg, T1);
-    sm_implicit_apply(D, &ws->pp[p], T1, ws->G + p * DD);
-}
-
 void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_real *out, sm_real *px) {
     sm_implicit_ws *ws = s->ws;
     memcpy(px, x, s->nodes * D * sizeof(sm_real));
     SM_FN(sm_imp_project)(s, px, 0);
     refresh(s, px); /* P x: other ranks' contacts project their blocks */
-    for_particles(s, particle_hessian, px);
-    scatter(s, ws->G, out);
+    SM_FN(sm_imp_particle_pass)(s, SM_IMP_PASS_HESSIAN, px, out);
     const sm_real dt2 = (sm_real)(s->c->dt * s->c->dt);
     for (size_t l = 0; l < s->nodes; l++) {
         sm_real m = ws->mass[l];

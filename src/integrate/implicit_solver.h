@@ -44,8 +44,8 @@
  *   krylov   -                            GMRES: K+1 basis vectors;           -
  *                                         line search: z before the step
  *   contact  contacts of the last GRID_COLLISIONS (of z; at the finish, of v*)
- *   pp, G    per particle: Algorithm 8's precompute at z; G_p(z) (GMRES overwrites G with the
- *            Hessian products, so the line search recomputes G before reading it)
+ *   pp       per particle: Algorithm 8's precompute at the last evaluation with it (a Newton
+ *            iterate; the line search's accepted trial)
  *   pinv     the preconditioner: per node the inverse of J's d x d diagonal block at the iterate
  *            (implicit_precond_dim.c); pz: GMRES's M^-1 v, then M^-1 of the combined basis
  *   partial  per-live-block partial sums (deterministic dot products) */
@@ -58,7 +58,6 @@ typedef struct sm_implicit_ws {
     sm_real *pinv;               /* d x d per node */
     sm_node_contact *contact;
     sm_implicit_particle *pp;
-    sm_real *G;
     double *partial;
 } sm_implicit_ws;
 
@@ -107,9 +106,18 @@ typedef struct sm_implicit_sys {
     const sm_grid *grid;         /* live blocks: node positions */
     size_t nodes;                /* node vectors' length: live blocks * 4^d */
     sm_grid_colliders colliders;
-    sm_implicit_ws *ws;          /* mass, vn, contacts, pp, G, force, partial */
+    sm_implicit_ws *ws;          /* mass, vn, contacts, pp, force, partial */
+    sm_real *cache;              /* per thread two dense block caches (transfer.h's layout: 2 x
+                                    SM_CACHE_SIDE^d x SM_LANES values), free during the solve */
     const sm_imp_ranks *ranks;   /* NULL on one rank */
 } sm_implicit_sys;
+
+/* What a particle pass computes per particle (implicit_pass_dim.c). */
+typedef enum sm_imp_pass {
+    SM_IMP_PASS_FORCE,      /* G_p(z) */
+    SM_IMP_PASS_PRECOMPUTE, /* G_p(z) and Algorithm 8's precompute at z (ws->pp) */
+    SM_IMP_PASS_HESSIAN     /* apply_p(T_p) at the last precompute */
+} sm_imp_pass;
 
 /* The implicit stage: reads P2G's mass and momentum (P2G without force), writes v^n (FLIP
  * only), v-bar and v-tilde where the explicit grid update does. */
@@ -156,14 +164,17 @@ void SM_FN(sm_imp_vstar)(const sm_implicit_sys *s, sm_real *vstar);
 /* NONLINEAR_FUNCTION at z (collided): y = the pruned residual; returns sum m |y|^2. With pre,
  * also Algorithm 8's precompute at z (ws->pp), as a Newton iteration at z needs. */
 double SM_FN(sm_imp_residual_norm2)(const sm_implicit_sys *s, sm_real *z, sm_real *y, int pre);
-/* TIMES_DIFF (Algorithm 6) at the last precompute: out = J x. px: scratch for P x; overwrites
- * ws->G with the Hessian products. */
+/* TIMES_DIFF (Algorithm 6) at the last precompute: out = J x. px: scratch for P x. */
 void SM_FN(sm_imp_times_diff)(const sm_implicit_sys *s, const sm_real *x, sm_real *out, sm_real *px);
 /* GRID_COLLISIONS of z in place, recording ws->contact. */
 void SM_FN(sm_imp_collide)(const sm_implicit_sys *s, sm_real *z);
 /* sum m (|z|^2 + |v^n|^2 + |dt g|^2 + |dt f / m|^2) over nodes with mass (ws->force as the last
  * sm_imp_forces left it): the scale of the residual's terms, for its rounding floor. */
 double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z);
+
+/* out = sum_p M_p grad w_ip with M_p of `kind` from T_p = sum_i in_i grad w_ip^T
+ * (implicit_pass_dim.c; in must be refreshed across ranks). */
+void SM_FN(sm_imp_particle_pass)(const sm_implicit_sys *s, sm_imp_pass kind, const sm_real *in, sm_real *out);
 
 /* Per-particle work of a scatter: particle p's terms (block pb, origin bc) added into out. */
 typedef void (*sm_imp_particle_scatter)(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb,

@@ -31,10 +31,8 @@ sm_status sm_implicit_ws_reserve(sm_implicit_ws *ws, int dim, size_t nodes, size
     if (ws->pcap < np) {
         size_t cap = np + np / 4 + 64;
         sm_implicit_particle *pp = sm_realloc(ws->pp, cap * sizeof *pp);
-        sm_real *G = sm_realloc(ws->G, cap * d * d * sizeof(sm_real));
-        if (pp) ws->pp = pp;
-        if (G) ws->G = G;
-        if (!pp || !G) return SM_ERR_NOMEM;
+        if (!pp) return SM_ERR_NOMEM;
+        ws->pp = pp;
         ws->pcap = cap;
     }
     return SM_OK;
@@ -42,7 +40,7 @@ sm_status sm_implicit_ws_reserve(sm_implicit_ws *ws, int dim, size_t nodes, size
 
 void sm_implicit_ws_free(sm_implicit_ws *ws) {
     void *arrays[] = {ws->partial, ws->mass, ws->vn, ws->z, ws->y, ws->dz, ws->aux, ws->force, ws->pz, ws->pinv, ws->krylov,
-                      ws->contact, ws->pp, ws->G};
+                      ws->contact, ws->pp};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++) free(arrays[i]);
     memset(ws, 0, sizeof *ws);
 }
@@ -50,6 +48,6 @@ void sm_implicit_ws_free(sm_implicit_ws *ws) {
 size_t sm_implicit_ws_bytes(const sm_implicit_ws *ws, int dim) {
     const size_t d = (size_t)dim;
     return ws->ncap * sizeof(sm_real) * (1 + 7 * d + d * d) + (size_t)ws->kcap * ws->ncap * d * sizeof(sm_real) +
-           ws->ncap * sizeof(sm_node_contact) + ws->pcap * (sizeof(sm_implicit_particle) + d * d * sizeof(sm_real)) +
+           ws->ncap * sizeof(sm_node_contact) + ws->pcap * sizeof(sm_implicit_particle) +
            ws->partial_cap * sizeof(double);
 }

@@ -89,6 +89,7 @@ static sm_implicit_io implicit_io(sm_world *w) {
     io.sys.grid = &w->grid;
     io.sys.colliders = grid_colliders(w);
     io.sys.ws = &w->imp;
+    io.sys.cache = w->cache.data;
     io.in = sm_grid_p2g_arrays(&w->grid);
     io.out = sm_grid_vel_arrays(&w->grid);
     io.newton_tolerance = w->def.newton_tolerance;
@@ -122,10 +123,12 @@ static sm_status binning_out_of_memory(sm_world *w) {
                          (unsigned long long)w->steps + 1);
 }
 
-/* 2. Bin particles by grid block; the transfer caches for the threads. */
+/* 2. Bin particles by grid block; the transfer caches for the threads (two each for the
+ * implicit solve's particle passes). */
 static sm_status bin_particles(sm_world *w, const sm_step_ctx *c) {
+    const int per_thread = w->def.integrator == SM_INTEGRATOR_IMPLICIT ? 2 : 1;
     if (w->stages->bin(&w->bins, &w->p, &w->grid, c) != SM_OK ||
-        sm_transfer_cache_reserve(&w->cache, w->dim, c->threads > 0 ? c->threads : 1) != SM_OK)
+        sm_transfer_cache_reserve(&w->cache, w->dim, per_thread * (c->threads > 0 ? c->threads : 1)) != SM_OK)
         return binning_out_of_memory(w);
     return SM_OK;
 }

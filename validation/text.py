@@ -476,12 +476,24 @@ def honesty(c):
   each, no gravity, E = 3.5e5) the energy left at 0.5 s, of 88 J, is at 0.5, 0.25, 0.125: sand
   8.1, 7.6, 6.5 J; elastic 61.4, 56.2, 49.3 J (PIC 39.0 and 26.6 J, FLIP 57.6 and 46.6 J at 0.5
   and 0.125). So the bulk loses more with more steps, plastic or not, and most with the most
-  dissipative transfer. Candidates, not isolated: each grid-to-particle transfer loses the part of the velocity the
-  grid does not carry, per step rather than per second; and at a base, a node loses every step
-  all the momentum P2G gave it into the base (the particles' velocity share, not an increment).
-  Measured by hand on commit 17ac394's program (Release; the collapses and the free blocks in
-  float, with docs/experiments/collapse_dt.py and dt_free_blocks.lua; the dropped block in
-  double), not by this document's runs.
+  dissipative transfer. Measured by hand on commit 17ac394's program (Release; the collapses and
+  the free blocks in float, with docs/experiments/collapse_dt.py and dt_free_blocks.lua; the
+  dropped block in double), not by this document's runs. **The transfer's loss is per step**
+  (docs/experiments/transfer_loss.py, commit 9d7ef30, double; an elastic block in free space
+  started in one standing mode of wavenumber k): per step APIC loses a fraction r ≈ 0.024 (k dx)^4
+  of the mode's energy (k dx = 0.39: 7.5e-4 at elastic_cfl 0.5, 5.2e-4 at 0.0625), PIC (k dx)^2/4,
+  FLIP 0.95 between them (3.4e-3 at k dx = 0.39); with 8 times the steps r changes by a factor
+  0.70–1.00 where a loss per second would give 0.125, so the energy lost per second grows 5.6–8
+  times as the step shrinks. Summed over the steps of the free elastic blocks (APIC) it is 9.7,
+  15.8, 24.9 J of the 26.6, 31.8, 38.7 J lost at 0.5, 0.25, 0.125: it accounts for the growth
+  with the step count. In the 2D collapse (a = 2, n = 12) it is 0.28 to 0.61 J of the 3.5 to
+  3.2 J dissipated (elastic_cfl 0.5 to 0.0625; plasticity dissipates the rest), so the probe
+  cannot say that it sets the runout; but the transfers' runouts (section 8: PIC 0.92, FLIP 1.97,
+  APIC 3.65) fall in the order of their losses per step, and at n = 24, where a mode of the
+  column's size has half the k dx and APIC loses 16 times less of it per step, the dependence
+  nearly vanishes (4.04, 4.05, 3.92). A second candidate is not ruled out: at a base a node loses
+  every step all the momentum P2G gave it. For users: at a coarse grid a max_dt far below the
+  elastic limit costs spreading as well as time.
 """
 
 

@@ -23,8 +23,11 @@
 #include "transfer/stencil_dim.h"
 
 /* A node's d values in one vector of 4 lanes (lanes past d hold 0): half of the transfers' 8,
- * which the d values of a node vector do not need. */
-typedef sm_real nvec __attribute__((vector_size(4 * sizeof(sm_real))));
+ * which the d values of a node vector do not need; so the pass's two caches (its input and its
+ * sums) together fill the thread's transfer cache, SM_CACHE_SIDE^d x SM_LANES values. */
+#define NLANES 4
+typedef sm_real nvec __attribute__((vector_size(NLANES * sizeof(sm_real))));
+_Static_assert(2 * NLANES <= SM_LANES, "the two node caches fit in a thread's transfer cache");
 
 /* Whether particle block pb reaches a grid block this rank owns: across ranks, a ghost block
  * that only reaches other ranks' blocks adds nothing the solve reads, and is skipped. */
@@ -183,7 +186,7 @@ void SM_FN(sm_imp_particle_pass)(const sm_implicit_sys *s, sm_imp_pass kind, con
     {
         int th, nt;
         sm_thread_team(&th, &nt);
-        nvec *cin = (nvec *)s->cache + (size_t)th * 2 * NCACHE, *cout = cin + NCACHE;
+        nvec *cin = (nvec *)(s->cache + (size_t)th * NCACHE * SM_LANES), *cout = cin + NCACHE;
         for (int col = 0; col < NCOLORS; col++) {
             if (bins->color_offset[col] == bins->color_offset[col + 1]) continue; /* the same on every thread */
             long lo, hi;

@@ -107,8 +107,8 @@ typedef struct sm_implicit_sys {
     size_t nodes;                /* node vectors' length: live blocks * 4^d */
     sm_grid_colliders colliders;
     sm_implicit_ws *ws;          /* mass, vn, contacts, pp, force, partial */
-    sm_real *cache;              /* per thread two dense block caches (transfer.h's layout: 2 x
-                                    SM_CACHE_SIDE^d x SM_LANES values), free during the solve */
+    sm_real *cache;              /* the transfer caches (transfer.h: SM_CACHE_SIDE^d x SM_LANES values
+                                    per thread), free during the solve: the particle passes' */
     const sm_imp_ranks *ranks;   /* NULL on one rank */
 } sm_implicit_sys;
 

@@ -123,12 +123,10 @@ static sm_status binning_out_of_memory(sm_world *w) {
                          (unsigned long long)w->steps + 1);
 }
 
-/* 2. Bin particles by grid block; the transfer caches for the threads (two each for the
- * implicit solve's particle passes). */
+/* 2. Bin particles by grid block; the transfer caches for the threads. */
 static sm_status bin_particles(sm_world *w, const sm_step_ctx *c) {
-    const int per_thread = w->def.integrator == SM_INTEGRATOR_IMPLICIT ? 2 : 1;
     if (w->stages->bin(&w->bins, &w->p, &w->grid, c) != SM_OK ||
-        sm_transfer_cache_reserve(&w->cache, w->dim, per_thread * (c->threads > 0 ? c->threads : 1)) != SM_OK)
+        sm_transfer_cache_reserve(&w->cache, w->dim, c->threads > 0 ? c->threads : 1) != SM_OK)
         return binning_out_of_memory(w);
     return SM_OK;
 }

@@ -1,7 +1,8 @@
 /* The implicit integrator in the world (thesis §3.6.2.2, Algorithms 5, 6, 8), 2D and 3D:
  * - block Jacobi and no preconditioner give the same first step (velocities within 10 x tolerance
- *   x dt), and once the workspaces fit, implicit steps make no heap allocation (none per Newton
- *   iteration or GMRES solve);
+ *   x dt); in 3D block Jacobi takes at least 5% fewer GMRES iterations over ten steps; once the
+ *   workspaces fit, implicit steps make no heap allocation (none per Newton iteration or GMRES
+ *   solve);
  * - the whole residual's Jacobian-vector product (TIMES_DIFF) equals central finite differences
  *   of the residual, for elastic and sand (plasticity inside the force), at random velocities;
  * - Newton converges quadratically near the solution on an elastic problem (two blocks colliding,
@@ -71,9 +72,10 @@ static sm_world *blocks(int dim, sm_integrator integ, int sand, double max_dt, i
 
 /* The block-Jacobi preconditioner: a sand block (E = 1e6) landed on a sticky ground, stepped at
  * 5e-3 s (about 15x its explicit limit) with and without it from the same state. The first
- * step's particle velocities agree to the Newton tolerance (both solves meet it). The iteration
- * counts are printed, not asserted: block Jacobi saved GMRES iterations in 3D and cost some in
- * 2D here (docs/benchmarks.md), so it is off by default. */
+ * step's particle velocities agree to the Newton tolerance (both solves meet it). In 3D block
+ * Jacobi must save GMRES iterations over the ten steps (at least 5%: measured 9% in double, 17% in
+ * float); in 2D it costs some here (15% more, docs/benchmarks.md), so the 2D counts are printed
+ * only, and it is off by default. */
 static void preconditioner(int dim) {
     youngs = 1e6;
     sm_world *w[2];
@@ -117,6 +119,7 @@ static void preconditioner(int dim) {
            dim, vdiff, w[0]->def.newton_tolerance * dt, (unsigned long long)newton[0], (unsigned long long)gmres[0],
            (unsigned long long)newton[1], (unsigned long long)gmres[1]);
     CHECK(vdiff < 10 * w[0]->def.newton_tolerance * dt);
+    if (dim == 3) CHECK(gmres[1] <= 0.95 * (double)gmres[0]);
     printf("%dD implicit steps 2-10, with and without the preconditioner: %llu heap allocations\n", dim,
            (unsigned long long)allocs);
     CHECK(allocs == 0); /* no allocation per step or per Newton iteration once the workspaces fit */

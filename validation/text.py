@@ -487,13 +487,19 @@ def honesty(c):
   times as the step shrinks. Summed over the steps of the free elastic blocks (APIC) it is 9.7,
   15.8, 24.9 J of the 26.6, 31.8, 38.7 J lost at 0.5, 0.25, 0.125: it accounts for the growth
   with the step count. In the 2D collapse (a = 2, n = 12) it is 0.28 to 0.61 J of the 3.5 to
-  3.2 J dissipated (elastic_cfl 0.5 to 0.0625; plasticity dissipates the rest), so the probe
-  cannot say that it sets the runout; but the transfers' runouts (section 8: PIC 0.92, FLIP 1.97,
-  APIC 3.65) fall in the order of their losses per step, and at n = 24, where a mode of the
-  column's size has half the k dx and APIC loses 16 times less of it per step, the dependence
-  nearly vanishes (4.04, 4.05, 3.92). A second candidate is not ruled out: at a base a node loses
-  every step all the momentum P2G gave it. For users: at a coarse grid a max_dt far below the
-  elastic limit costs spreading as well as time.
+  3.2 J dissipated (elastic_cfl 0.5 to 0.0625; plasticity dissipates the rest), so the energy
+  alone does not say that it sets the runout. **A transfer without that loss removes most of
+  the dependence**: pure FLIP (the collapse scenes' `flip_ratio=1`: no PIC share, so no per-step
+  damping of the resolved motion) runs out 3.43, 3.49, 3.27, 3.01 at elastic_cfl 0.5, 0.25,
+  0.125, 0.0625 (2D, n = 12; APIC 3.65, 3.15, 2.76, 2.41), 4.01 and 4.01 at n = 24 (0.5, 0.25),
+  and in 3D (n = 8) 1.53 and 1.53 at 0.5 and 0.25 (APIC 1.41, 1.28); a PIC share of 1% per
+  step (flip_ratio 0.99) brings it back (2D n = 12: 2.63, 2.34, 2.04). So the deposit's
+  dependence on the step is mostly the transfers' per-step damping of the flow (pure FLIP keeps a
+  12% drop over 8 times the steps, not explained here), and the runout is very sensitive to it:
+  1% PIC per step costs a quarter of the 2D runout. Measured by hand on commit ffeb8c8's program
+  (float, Release, docs/experiments/collapse_dt.py with flip_ratio=...). For users: at a coarse
+  grid a max_dt far below the elastic limit costs spreading as well as time, and the PIC share of
+  FLIP (flip_ratio below 1) is a strong damper.
 """
 
 

@@ -7,7 +7,8 @@
 --   n        cells across R0 (default 10; dx = R0/n)
 --   R0       radius, m (default 0.05)
 --   ppc      particles per cell (default 8)
---   phi, fit, base, base_mu, kernel, transfer, elastic_cfl, T, fps_n, projection, sticks: as collapse2d.lua
+--   phi, fit, base, base_mu, kernel, transfer, flip_ratio, elastic_cfl, T, fps_n, projection, sticks: as
+--   collapse2d.lua
 local P = params
 local a = P.a or 1
 local R0 = P.R0 or 0.05
@@ -25,7 +26,7 @@ local T = (P.T or (a < 1.5 and 8 or 5)) * tau
 local fps = (P.fps_n or 4) / tau
 return {
   dim = 3, dx = dx, ppc = P.ppc or 8,
-  kernel = P.kernel or "quadratic", transfer = P.transfer or "apic",
+  kernel = P.kernel or "quadratic", transfer = P.transfer or "apic", flip_ratio = P.flip_ratio or 0.95,
   elastic_cfl = P.elastic_cfl or 0.5,
   particle_projection = (P.projection == nil) and true or P.projection,
   static_friction_sticks = (P.sticks == nil) and true or P.sticks,

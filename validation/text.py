@@ -496,7 +496,10 @@ def honesty(c):
   step (flip_ratio 0.99) brings it back (2D n = 12: 2.63, 2.34, 2.04). So the deposit's
   dependence on the step is mostly the transfers' per-step damping of the flow (pure FLIP keeps a
   12% drop over 8 times the steps, not explained here), and the runout is very sensitive to it:
-  1% PIC per step costs a quarter of the 2D runout. Measured by hand on commit ffeb8c8's program
+  1% PIC per step costs a quarter of the 2D runout. Part of the 3D shortfall is this damping:
+  with pure FLIP the 3D runouts of section 2 (thesis fit, R0/dx = 8) are 0.40, 0.91, 1.53, 2.65 at
+  a = 0.5, 1, 2, 4 (APIC 0.28, 0.78, 1.41, 2.40), −28% against Lube et al. 2004 instead of −40%
+  (geometric means). Measured by hand on commit ffeb8c8's program
   (float, Release, docs/experiments/collapse_dt.py with flip_ratio=...). For users: at a coarse
   grid a max_dt far below the elastic limit costs spreading as well as time, and the PIC share of
   FLIP (flip_ratio below 1) is a strong damper.

@@ -495,7 +495,9 @@ def honesty(c):
   and in 3D (n = 8) 1.53 and 1.53 at 0.5 and 0.25 (APIC 1.41, 1.28); a PIC share of 1% per
   step (flip_ratio 0.99) brings it back (2D n = 12: 2.63, 2.34, 2.04). So the deposit's
   dependence on the step is mostly the transfers' per-step damping of the flow (pure FLIP keeps a
-  12% drop over 8 times the steps, not explained here), and the runout is very sensitive to it:
+  12% drop over 8 times the steps on the sticky base, but on a Coulomb base, μ = 0.5, no trend
+  beyond this resolution's scatter: 3.94, 3.98, 3.52, 4.10 at 0.5 to 0.0625; the sticky base's
+  own per-step loss may be that rest), and the runout is very sensitive to it:
   1% PIC per step costs a quarter of the 2D runout. Part of the 3D shortfall is this damping:
   with pure FLIP the 3D runouts of section 2 (thesis fit, R0/dx = 8) are 0.40, 0.91, 1.53, 2.65 at
   a = 0.5, 1, 2, 4 (APIC 0.28, 0.78, 1.41, 2.40), −28% against Lube et al. 2004 instead of −40%

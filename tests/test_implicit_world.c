@@ -4,11 +4,12 @@
  *   workspaces fit, implicit steps make no heap allocation (none per Newton iteration or GMRES
  *   solve);
  * - the whole residual's Jacobian-vector product (TIMES_DIFF) equals central finite differences
- *   of the residual, for elastic and sand (plasticity inside the force), at random velocities;
+ *   of the residual, for elastic and sand (plasticity inside the force), at random velocities,
+ *   with the quadratic and the cubic kernel;
  * - Newton converges quadratically near the solution on an elastic problem (two blocks colliding,
  *   GMRES solved tightly): each residual is below 10 times the square of the previous one, scaled;
  * - an elastic block dropped a quarter cell onto a sticky ground at a small dt: implicit and explicit centres of mass
- *   agree within 0.5 dx over 0.15 s (dx 0.02 m in 2D, 0.04 m in 3D; dt 2.5e-4 per 0.02 m of dx);
+ *   agree within 0.5 dx over 0.15 s (dx 0.02 m in 2D, 0.04 m in 3D; dt 2.5e-4 per 0.02 m of dx), both kernels;
  * - at a dt 10x above the explicit stability limit, explicit blows up (stopped with a numerical
  *   failure, or speeds above 100 m/s) while implicit stays bounded and settles. */
 #include "test_util.h"
@@ -27,12 +28,14 @@
 #define DX(dim) ((dim) == 2 ? 0.02 : 0.04)
 
 static double youngs = 1e5; /* E of the blocks */
+static sm_kernel kernel = SM_KERNEL_QUADRATIC; /* of the blocks' worlds */
 
 static sm_world *blocks(int dim, sm_integrator integ, int sand, double max_dt, int ground, double elastic_cfl) {
     sm_world_def def = sm_world_def_default();
     def.dim = dim;
     def.dx = DX(dim);
     def.integrator = integ;
+    def.kernel = kernel;
     def.max_dt = max_dt;
     def.elastic_cfl = elastic_cfl;
     def.domain_max[0] = 1;
@@ -126,24 +129,57 @@ static void preconditioner(int dim) {
     for (int k = 0; k < 2; k++) sm_world_destroy(w[k]);
 }
 
+/* The whole residual's JVP (TIMES_DIFF) against central differences, elastic and sand, at random
+ * velocities, in the worlds of `kernel`. */
+static void jvp(int dim) {
+    const char *kname = kernel == SM_KERNEL_CUBIC ? "cubic" : "quadratic";
+    for (int sand = 0; sand < 2; sand++) {
+        sm_world *w = blocks(dim, SM_INTEGRATOR_IMPLICIT, sand, 1e-3, 0, 0.5);
+        CHECK(w != NULL);
+        /* deform the particles a little first (some plastic flow for sand) */
+        CHECK(sm_world_advance(w, 0.04) == SM_OK);
+        double worst = 0;
+        for (int k = 0; k < 3; k++) {
+            double e = sm_world_debug_implicit_jvp(w, 2e-3, 11 + (uint64_t)k, 0.5, SM_DOUBLE ? 1e-6 : 1e-3);
+            worst = fmax(worst, e);
+        }
+        printf("%dD %s, %s kernel: JVP vs finite differences, worst relative error %.2e\n", dim, sand ? "sand" : "elastic",
+               kname, worst);
+        CHECK(worst < JVP_TOL);
+        sm_world_destroy(w);
+    }
+}
+
+/* An elastic block dropped onto a sticky ground at a small dt: the implicit and explicit centres
+ * of mass agree within 0.5 dx over 0.15 s (the implicit force is the explicit one). */
+static void small_dt(int dim) {
+    sm_world *wi = blocks(dim, SM_INTEGRATOR_IMPLICIT, 0, 2.5e-4 * DX(dim) / 0.02, 1, 0);
+    sm_world *we = blocks(dim, SM_INTEGRATOR_EXPLICIT, 0, 2.5e-4 * DX(dim) / 0.02, 1, 0);
+    double worst = 0;
+    for (int f = 1; f <= 15; f++) {
+        CHECK(sm_world_advance(wi, f * 0.01) == SM_OK);
+        CHECK(sm_world_advance(we, f * 0.01) == SM_OK);
+        sm_diagnostics di, de;
+        sm_world_diagnostics(wi, &di);
+        sm_world_diagnostics(we, &de);
+        worst = fmax(worst, fabs(di.center_of_mass[1] - de.center_of_mass[1]));
+    }
+    printf("%dD small dt, %s kernel: implicit vs explicit centre of mass over 0.15 s, worst |dy| = %.2e m (0.5 dx = %g)\n",
+           dim, kernel == SM_KERNEL_CUBIC ? "cubic" : "quadratic", worst, 0.5 * DX(dim));
+    CHECK(worst < 0.5 * DX(dim));
+    sm_world_destroy(wi);
+    sm_world_destroy(we);
+}
+
 int main(void) {
     for (int dim = 2; dim <= 3; dim++) {
         preconditioner(dim);
-        /* --- JVP of the residual vs finite differences --- */
-        for (int sand = 0; sand < 2; sand++) {
-            sm_world *w = blocks(dim, SM_INTEGRATOR_IMPLICIT, sand, 1e-3, 0, 0.5);
-            CHECK(w != NULL);
-            /* deform the particles a little first (some plastic flow for sand) */
-            CHECK(sm_world_advance(w, 0.04) == SM_OK);
-            double worst = 0;
-            for (int k = 0; k < 3; k++) {
-                double e = sm_world_debug_implicit_jvp(w, 2e-3, 11 + (uint64_t)k, 0.5, SM_DOUBLE ? 1e-6 : 1e-3);
-                worst = fmax(worst, e);
-            }
-            printf("%dD %s: JVP vs finite differences, worst relative error %.2e\n", dim, sand ? "sand" : "elastic", worst);
-            CHECK(worst < JVP_TOL);
-            sm_world_destroy(w);
+        for (int k = 0; k < 2; k++) {
+            kernel = k ? SM_KERNEL_CUBIC : SM_KERNEL_QUADRATIC;
+            jvp(dim);
+            small_dt(dim);
         }
+        kernel = SM_KERNEL_QUADRATIC;
         /* --- quadratic convergence --- */
         {
             sm_world *w = blocks(dim, SM_INTEGRATOR_IMPLICIT, 0, 2e-3, 0, 0);
@@ -172,25 +208,6 @@ int main(void) {
             }
             CHECK(checked >= 1);
             sm_world_destroy(w);
-        }
-        /* --- implicit vs explicit at a small dt --- */
-        {
-            sm_world *wi = blocks(dim, SM_INTEGRATOR_IMPLICIT, 0, 2.5e-4 * DX(dim) / 0.02, 1, 0);
-            sm_world *we = blocks(dim, SM_INTEGRATOR_EXPLICIT, 0, 2.5e-4 * DX(dim) / 0.02, 1, 0);
-            double worst = 0;
-            for (int f = 1; f <= 15; f++) {
-                CHECK(sm_world_advance(wi, f * 0.01) == SM_OK);
-                CHECK(sm_world_advance(we, f * 0.01) == SM_OK);
-                sm_diagnostics di, de;
-                sm_world_diagnostics(wi, &di);
-                sm_world_diagnostics(we, &de);
-                worst = fmax(worst, fabs(di.center_of_mass[1] - de.center_of_mass[1]));
-            }
-            printf("%dD small dt: implicit vs explicit centre of mass over 0.15 s, worst |dy| = %.2e m (0.5 dx = %g)\n", dim,
-                   worst, 0.5 * DX(dim));
-            CHECK(worst < 0.5 * DX(dim));
-            sm_world_destroy(wi);
-            sm_world_destroy(we);
         }
         /* --- dt 10x above the explicit limit --- */
         {

@@ -179,14 +179,18 @@ static inline __attribute__((always_inline)) void pass_block(const sm_implicit_s
     flush_block(pb, cout, out);
 }
 
-void SM_FN(sm_imp_particle_pass)(const sm_implicit_sys *s, sm_imp_pass kind, const sm_real *in, sm_real *out) {
+/* Work on one particle block of a colour sweep, on thread th. */
+typedef void (*block_fn)(const sm_implicit_sys *s, const sm_pblock *pb, int th, void *arg);
+
+/* fn for every particle block this rank needs, colour by colour (no two threads reach a node at
+ * once; the same order per node for any thread count), the blocks of a colour split among the
+ * threads in contiguous ranges of equal particle counts (sm_bins_range). */
+static void sweep_by_colour(const sm_implicit_sys *s, block_fn fn, void *arg) {
     const sm_bins *bins = s->bins;
-    memset(out, 0, s->nodes * D * sizeof(sm_real));
 #pragma omp parallel num_threads(s->c->threads)
     {
         int th, nt;
         sm_thread_team(&th, &nt);
-        nvec *cin = (nvec *)(s->cache + (size_t)th * NCACHE * SM_LANES), *cout = cin + NCACHE;
         for (int col = 0; col < NCOLORS; col++) {
             if (bins->color_offset[col] == bins->color_offset[col + 1]) continue; /* the same on every thread */
             long lo, hi;
@@ -194,34 +198,48 @@ void SM_FN(sm_imp_particle_pass)(const sm_implicit_sys *s, sm_imp_pass kind, con
                           th, &lo, &hi);
             for (long t = lo; t < hi; t++) {
                 const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
-                if (!pblock_needed(s, pb)) continue;
-                if (s->c->stencil == 3) pass_block(s, 3, kind, pb, in, out, cin, cout);
-                else pass_block(s, 4, kind, pb, in, out, cin, cout);
+                if (pblock_needed(s, pb)) fn(s, pb, th, arg);
             }
 #pragma omp barrier
         }
     }
 }
 
+typedef struct {
+    sm_imp_pass kind;
+    const sm_real *in;
+    sm_real *out;
+} pass_arg;
+
+static void pass_block_fn(const sm_implicit_sys *s, const sm_pblock *pb, int th, void *arg) {
+    const pass_arg *a = arg;
+    nvec *cin = (nvec *)(s->cache + (size_t)th * NCACHE * SM_LANES), *cout = cin + NCACHE;
+    if (s->c->stencil == 3) pass_block(s, 3, a->kind, pb, a->in, a->out, cin, cout);
+    else pass_block(s, 4, a->kind, pb, a->in, a->out, cin, cout);
+}
+
+void SM_FN(sm_imp_particle_pass)(const sm_implicit_sys *s, sm_imp_pass kind, const sm_real *in, sm_real *out) {
+    memset(out, 0, s->nodes * D * sizeof(sm_real));
+    pass_arg a = {kind, in, out};
+    sweep_by_colour(s, pass_block_fn, &a);
+}
+
+typedef struct {
+    sm_imp_particle_scatter fn;
+    const void *arg;
+    sm_real *out;
+} scatter_arg;
+
+static void scatter_block_fn(const sm_implicit_sys *s, const sm_pblock *pb, int th, void *arg) {
+    (void)th;
+    const scatter_arg *a = arg;
+    int bc[3];
+    pblock_origin(pb, bc);
+    for (uint32_t idx = pb->start; idx < pb->end; idx++) a->fn(s, a->arg, s->bins->perm[idx], pb, bc, a->out);
+}
+
 void SM_FN(sm_imp_scatter_by_colour)(const sm_implicit_sys *s, sm_imp_particle_scatter fn, const void *arg,
                                      sm_real *out) {
-    const sm_bins *bins = s->bins;
-#pragma omp parallel num_threads(s->c->threads)
-    {
-        int th, nt;
-        sm_thread_team(&th, &nt);
-        for (int col = 0; col < NCOLORS; col++) {
-            long lo, hi;
-            sm_bins_range(bins, bins->color_blocks, (long)bins->color_offset[col], (long)bins->color_offset[col + 1], nt,
-                          th, &lo, &hi);
-            for (long t = lo; t < hi; t++) {
-                const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
-                if (!pblock_needed(s, pb)) continue;
-                int bc[3];
-                pblock_origin(pb, bc);
-                for (uint32_t idx = pb->start; idx < pb->end; idx++) fn(s, arg, bins->perm[idx], pb, bc, out);
-            }
-#pragma omp barrier
-        }
-    }
+    scatter_arg a = {fn, arg, out};
+    sweep_by_colour(s, scatter_block_fn, &a);
 }

@@ -20,9 +20,7 @@
 
 #include <string.h>
 
-#include "core/threads.h"
 #include "integrate/implicit_solver.h"
-#include "transfer/stencil_dim.h"
 
 double SM_FN(sm_imp_dot)(const sm_implicit_sys *s, const sm_real *a, const sm_real *b) {
     const sm_implicit_ws *ws = s->ws;

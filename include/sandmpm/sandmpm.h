@@ -149,15 +149,17 @@ typedef struct sm_world_def {
     sm_integrator integrator;/**< default SM_INTEGRATOR_EXPLICIT */
     double cfl;              /**< CFL number in (0,1]: no particle moves more than cfl*dx per step. Default 1 (thesis). */
     double max_dt;           /**< largest time step, s. Default 1e-3. */
-    double elastic_cfl;      /**< factor on the elastic-wave bound dt <= elastic_cfl*dx/c, c = sqrt((lambda+2mu)/rho). Default 0.5 (stable to 0.92 and more, but contact friction creeps more above it: docs/benchmarks.md). 0 disables it. Explicit only: the implicit integrator is not bound by it. */
+    double elastic_cfl;      /**< factor on the elastic-wave bound dt <= elastic_cfl*dx/c, c = sqrt((lambda+2mu)/rho). Default 0.6 (stable to 0.92 and more in every measured case; a block released on an incline creeps more above it: docs/benchmarks.md, "Time-step limit"). 0 disables it. Explicit only: the implicit integrator is not bound by it. */
     sm_collide_mode wall_mode;/**< behaviour of the domain walls. Default SM_COLLIDE_SEPARATE. */
     double wall_friction;    /**< Coulomb coefficient of the domain walls. Default 0. */
-    int static_friction_sticks; /**< 1 (default): a grid node whose Coulomb friction stops it relative to a
-                                     collider (static regime) also moves with that stopped velocity in the
-                                     position and F update, i.e. static friction acts as a constraint like
-                                     sticky. 0: positions and F always use the pre-friction velocities, exactly
-                                     as thesis §3.6.5; that lets a block creep down an incline at a speed of
-                                     about g sin(theta) dt M / m_contact even when mu > tan(theta). */
+    int static_friction_sticks; /**< 1 (default): a grid node in contact with a collider moves in the position
+                                     and F update with its post-friction velocity, sticking or slipping: static
+                                     friction acts as a constraint like sticky, and a slipping node deforms the
+                                     material as its momentum moves. 0: positions and F always use the
+                                     pre-friction velocities, exactly as thesis §3.6.5; that lets a block creep
+                                     down an incline at about g sin(theta) dt M / m_contact even when
+                                     mu > tan(theta), and lets the contact feed a resting block's vibration at
+                                     long steps. (Named when it applied to the static regime only.) */
     int particle_projection; /**< 1 (default): a particle that ends a step inside a collider is moved back to
                                   its surface (position only; counted in diagnostics). Collisions are still
                                   resolved on the grid (§3.6.3); this only catches the small residual

@@ -6,8 +6,12 @@
  *     velocity and the contact records; the collision impulse per unit mass is dv = collided - v*;
  *   FRICTION (sm_friction_node): v-tilde = FRICTION(v-bar, dv), v-bar being the collided velocity
  *     (explicit) or the implicit solve's solution (Algorithm 5, line 5);
- *   static friction sticks (def.static_friction_sticks): when every contact is in the static
- *     regime, v-bar = v-tilde too, so that positions do not creep along the surface. */
+ *   friction moves the material (def.static_friction_sticks, the name from when it applied to the
+ *     static regime only): at a node with contacts v-bar = v-tilde too, sticking or slipping, so
+ *     that positions do not creep along the surface (static) and F integrates the velocity the
+ *     momentum keeps (sliding; with the pre-friction v-bar the contact can feed a vibration of the
+ *     body: grid_collide_dim.c, node_friction). 0: v-bar stays the pre-friction velocity
+ *     (thesis §3.6.5). */
 #ifndef SM_COLLIDE_GRID_COLLIDE_H
 #define SM_COLLIDE_GRID_COLLIDE_H
 
@@ -19,7 +23,7 @@
 typedef struct sm_grid_colliders {
     const sm_collider *cols; /* user colliders, then the domain walls */
     int count;
-    int static_sticks;       /* def.static_friction_sticks */
+    int static_sticks;       /* def.static_friction_sticks: v-bar = v-tilde at nodes with contacts */
 } sm_grid_colliders;
 
 #ifdef SM_DIM

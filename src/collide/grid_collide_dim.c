@@ -16,13 +16,20 @@ static inline void node_position(const sm_grid *g, const sm_step_ctx *c, size_t 
 }
 
 /* The rule of grid_collide.h for one node: v holds v-bar on entry (the collided velocity, or the
- * implicit solution), dv the collision impulse, rec the contacts. Writes v-bar and v-tilde. */
+ * implicit solution), dv the collision impulse, rec the contacts. Writes v-bar and v-tilde.
+ * With static_sticks, a node in contact moves (positions, F) with its post-friction velocity,
+ * sticking or slipping: friction then changes the deformation as it changes the momentum. With a
+ * slipping node's pre-friction v-bar, F integrated a velocity the momentum no longer had, and the
+ * contact fed the body's vibration at large steps: test_incline's 2D block at rest on the 30
+ * degree plane (held there with mu 2, then mu 0.7) started to vibrate at elastic_cfl 0.65 and 0.7
+ * (kinetic energy about its centre of mass from 1e-10 J to 6e-3 J) and slid 29 mm; now it holds
+ * (0.05 mm) (2026-12-07, docs/experiments/README.md, incline_vibration.c). */
 static inline void node_friction(const sm_grid_colliders *gc, const double xi[3], const sm_node_contact *rec,
                                  const double dv[3], double v[3], sm_real *vbar, sm_real *vtilde) {
     for (int a = 0; a < D; a++) vbar[a] = (sm_real)v[a];
     if (rec->count > 0) {
-        const int stuck = sm_friction_node(gc->cols, D, xi, rec, dv, v);
-        if (stuck && gc->static_sticks)
+        (void)sm_friction_node(gc->cols, D, xi, rec, dv, v);
+        if (gc->static_sticks)
             for (int a = 0; a < D; a++) vbar[a] = (sm_real)v[a];
     }
     for (int a = 0; a < D; a++) vtilde[a] = (sm_real)v[a];

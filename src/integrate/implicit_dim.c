@@ -216,10 +216,14 @@ static void finish(const sm_implicit_io *io, const sm_implicit_sys *s) {
     SM_FN(sm_imp_collide)(s, vcollided); /* the contacts of this call drive FRICTION */
     SM_FN(sm_grid_friction_after_solve)(&s->colliders, s->grid, s->c, s->nodes, ws->contact, ws->z, vstar,
                                         vcollided, io->out.vbar, io->out.vtilde);
-    /* Across ranks G2P reads blocks of other ranks too. v-bar = z is right there (the force
-     * evaluation above refreshed z), v-tilde is not: v* sums only the particles that reach this
-     * rank's blocks (implicit_ops_dim.c's pblock_needed). */
-    if (s->ranks) s->ranks->refresh(s->ranks->ctx, io->out.vtilde);
+    /* Across ranks G2P reads blocks of other ranks too. z is right there (the force evaluation
+     * above refreshed it), v-tilde is not: v* sums only the particles that reach this rank's
+     * blocks (implicit_ops_dim.c's pblock_needed). Nor is v-bar where it took v-tilde's value at
+     * a contact (static_friction_sticks). */
+    if (s->ranks) {
+        s->ranks->refresh(s->ranks->ctx, io->out.vtilde);
+        if (s->colliders.static_sticks) s->ranks->refresh(s->ranks->ctx, io->out.vbar);
+    }
 }
 
 static sm_implicit_sys system_of(const sm_implicit_io *io, const sm_step_ctx *c) {

@@ -454,12 +454,12 @@ def honesty(c):
   numbers above are for the resolutions stated, not converged values.
 - **Time step:** at a fixed grid the deposit depends on the time step and does not settle as it
   shrinks. The 2D collapse at a = 2, n = 12 (section 8's reference) runs out 3.65, 3.15, 2.76, 2.41
-  at elastic_cfl = 0.5 (the program's default, used by every run above), 0.25, 0.125, 0.0625 (3,580
+  at elastic_cfl = 0.5 (the program's default until 2026-12-07; the runs above use 0.6), 0.25, 0.125, 0.0625 (3,580
   to 28,520 steps; heights 1.11, 1.13, 1.17, 1.23); at n = 24 4.04, 4.05, 3.92 at 0.5, 0.25, 0.125;
   with FLIP at n = 12 1.97, 1.73 at 0.5, 0.25; in 3D (n = 8) 1.41, 1.28 at 0.5, 0.25. Longer steps
-  than the default barely move it (3D n = 8: 1.41 at 0.5, 0.7 and 0.9; 2D n = 24: 4.04 at 0.5 and
+  than 0.5 barely move it (3D n = 8: 1.41 at 0.5, 0.7 and 0.9; 2D n = 24: 4.04 at 0.5 and
   0.9; 2D n = 12: 3.65, 3.51, 3.93 at 0.5, 0.7, 0.9, this resolution's scatter): the loss sets in
-  below the default. The explicit
+  below 0.5. The explicit
   step is dt = elastic_cfl dx / c, so section 8's resolution rows change dx and dt together, and a
   stiffer E shortens dt and with it the runout. The same holds for a block dropped on the ground
   (scenes/youngs_modulus.lua, explicit, E = 1e6): its settled centre of mass rises from 0.0891 to

@@ -149,12 +149,15 @@ the post-friction velocity at every contact node (v-bar = v-tilde, not only wher
 sticks: docs/experiments/friction-moves-material.patch), does not stop this slide (66.7 mm by
 1.2 s against 68.0) but removes a time-step instability: a block at rest on test_incline's slip
 plane (μ = 0.7), released there with μ = 2 and switched to 0.7, slid 29.3 mm at elastic_cfl 0.65
-and 29.1 mm at 0.7 with the rule of the program, 0.05 mm at 0.7 with the change, and test_incline's
-creep at 0.7 fell from 25.6 to 15.6 mm in 1 s (still above its 10 mm bound, so elastic_cfl stays
-at 0.5). It is not in the program: it changes every scene with friction (final kinetic energies by
-up to 0.3 %, elastic energies by up to 4 % in tests/same_results), and across ranks the implicit
-solve would have to refresh v-bar as it does v-tilde (test_mpi's implicit runs differ from one
-rank's without that).
+and 29.1 mm at 0.7 with the rule of the program then, 0.05 mm at 0.7 with the change, and
+test_incline's creep at 0.7 fell from 25.6 to 15.6 mm in 1 s. **Since 2026-12-07 this is the
+program's rule** (`static_friction_sticks`, on by default; the implicit solve refreshes v-bar across
+ranks as it does v-tilde, without which test_mpi's implicit runs differed from one rank's): it
+changed every scene with friction (final kinetic energies by up to 0.3 %, elastic energies by up
+to 4 % in tests/same_results), and with it test_incline's creep is 6.2, 7.0, 8.0 and 15.6 mm in 1 s
+at elastic_cfl 0.5, 0.6, 0.65 and 0.7 (float Release; 7.2, 20.7 and 25.7 mm at 0.5, 0.6 and 0.7
+with the old rule), so the default elastic_cfl is now 0.6 (docs/benchmarks.md, "Time-step
+limit, second look").
 
 Near the threshold the friction the grid delivers depends on how the normal support is spread over
 the contact nodes: the per-node Coulomb rule (3.102 applied node by node, as the thesis and the peers
@@ -184,7 +187,8 @@ per-node rule holds a quiet block; while the block rings after its release (APIC
 that vibration for 0.4 to 1.5 s here), its contact nodes stick and slip unevenly, in sum deliver less
 than μ times the normal impulse, and gravity walks the block down the slope. That is what
 test_incline's 10 mm bound measures, and why it fails at elastic_cfl 0.7 (a longer transient, not
-a lasting creep); the pooled rule above removes it because it sums the ringing contact.
+a lasting creep; with the rule of the program since 2026-12-07 too: 15.6 mm); the pooled rule above
+removes it because it sums the ringing contact.
 
 **The fit window** (measured 2026-12-06 at a139f79 with docs/experiments/incline_window.c, the
 early window's block positions, the double build, max Δt 2e-5 s, separating plane): fitted over

@@ -10,7 +10,7 @@
 --   base     "sticky" (default, the thesis's ground) or "friction" (Coulomb, mu = base_mu, default 0.5)
 --   kernel, transfer   "quadratic"/"cubic", "apic"/"pic"/"flip"
 --   flip_ratio         FLIP's share of the FLIP/PIC blend (default 0.95, the program's)
---   elastic_cfl        the explicit step's elastic Courant number (default 0.5, the program's)
+--   elastic_cfl        the explicit step's elastic Courant number (default: the program's, 0.6 since 2026-12-07)
 --   T        simulated time in units of sqrt(H0/g) (default 5, 8 for a < 1.5: the front stops by about 3)
 --   fps_n    frames per sqrt(H0/g) (default 4)
 --   projection, sticks   sm_world_def's particle_projection / static_friction_sticks (default true)
@@ -39,7 +39,7 @@ local fps = fps_n / tau
 return {
   dim = 2, dx = dx, ppc = P.ppc or 4,
   kernel = P.kernel or "quadratic", transfer = P.transfer or "apic", flip_ratio = P.flip_ratio or 0.95,
-  elastic_cfl = P.elastic_cfl or 0.5,
+  elastic_cfl = P.elastic_cfl, -- nil: the program's default
   particle_projection = (P.projection == nil) and true or P.projection,
   static_friction_sticks = (P.sticks == nil) and true or P.sticks,
   fps = fps, frames = math.ceil(T * fps - 1e-9),

@@ -27,7 +27,7 @@ local fps = (P.fps_n or 4) / tau
 return {
   dim = 3, dx = dx, ppc = P.ppc or 8,
   kernel = P.kernel or "quadratic", transfer = P.transfer or "apic", flip_ratio = P.flip_ratio or 0.95,
-  elastic_cfl = P.elastic_cfl or 0.5,
+  elastic_cfl = P.elastic_cfl, -- nil: the program's default
   particle_projection = (P.projection == nil) and true or P.projection,
   static_friction_sticks = (P.sticks == nil) and true or P.sticks,
   fps = fps, frames = math.ceil(T * fps - 1e-9),

@@ -99,6 +99,27 @@ it depends on where the plane lies in the grid. By hand (commit after c9df470, t
 within 1.2e-4 of the float figures (tilted μ = 0.5 −2.35e-3, aligned μ = 0.5 +5.16e-3 and
 μ = 0.7 +1.11e-3, shifted μ = 0.7 −1.28e-3).
 
+**Finding, fixed (2026-12-07): a separating plane pulled nodes onto its surface, and friction
+took μ times the pull.** The tilted block at μ = 0.5 slid slower the smaller the step: −2.47e-3
+at max Δt 2e-5 s, −6.62e-3 at 1e-5 s, −7.42e-2 at 5e-6 s (float; the double build −7.37e-2 at
+5e-6 s), where PIC gave −6e-5 and an accounting of the plane's impulses (a scratch hook in
+src/collide/grid_collide_dim.c, double, 5e-6 s, per 0.1 s) found the friction 1.2% above μ times
+the normal impulse, which the per-node rule cannot give if every impulse pushes: the sum of
+|Δv| over the contact nodes exceeded the net normal impulse by 1.2–1.5%, and about one contact
+node per step had an impulse pointing into the plane. The cause: a node within the contact
+tolerance (φ̂ below 1e-9 (1 + |x|₁) m, kept so that the implicit solve's contact set does not
+flicker) was projected onto the surface even when it was outside and moving away, which took
+every outward normal speed below that tolerance over Δt (1.4 mm/s at 5e-6 s, 6 m from the
+origin) — the ringing block's bottom nodes have such speeds all the time —, and FRICTION took
+μ times that pull from the tangential velocity. A separating (or arriving sticky) contact now
+only pushes; within the tolerance it is still a contact, with no impulse (slip contacts still
+remove the normal velocity both ways; tests/test_collide.c, `test_separate_does_not_pull`).
+After the fix (double, by hand): −1.8e-3, +3.1e-4, +2.0e-3 at 2e-5, 1e-5, 5e-6 s, the friction
+equal to μ times the normal impulse in every 0.1 s, no inward impulse. What is left at μ = 0.5
+is the ringing of the elastic block (its elastic energy grows from 0.03 to 0.07 J over the fit
+window; PIC, which damps it, gave −6e-5 at 5e-6 s even with the pull), and, on the grid-aligned plane, the slide below. The
+same scratch hook is docs/experiments/incline-impulses.patch.
+
 **The static rows hide a slide on the grid-aligned planes.** A block sliding at a steady speed has
 no acceleration, so the μ = 0.7 rows say little: traced by hand (a scratch copy of incline_window.c that prints the centre of mass, not kept; double, the table's geometry,
 centre of mass along the slope from the first frame), the tilted block moves 0.88 mm, all of it

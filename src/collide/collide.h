@@ -92,9 +92,8 @@ int sm_collide_node_among(const sm_collider *cs, const int *which, int count, in
 /* FRICTION for one node: v (in: v-bar, out: v-tilde); dv = v-bar - v* is the collision impulse per
  * unit mass. For each recorded slip/separate collision b with normal n, relative velocity
  * vr = v - v_b, tangential part vt = vr - n (n . vr): v -= min(|vt|, mu_b |dv|) vt/|vt|.
- * Sticky nodes are unchanged. Returns 1 if the node has recorded collisions and every one of them
- * was in the static regime (|vt| <= mu |dv|: tangential relative motion stopped), else 0. */
-int sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const sm_node_contact *rec,
+ * Sticky nodes are unchanged. */
+void sm_friction_node(const sm_collider *cs, int dim, const double xi[3], const sm_node_contact *rec,
                      const double dv[3], double v[3]);
 
 /* Rotation matrix (row-major) of a unit quaternion (w,x,y,z). */

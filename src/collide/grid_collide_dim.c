@@ -28,7 +28,7 @@ static inline void node_friction(const sm_grid_colliders *gc, const double xi[3]
                                  const double dv[3], double v[3], sm_real *vbar, sm_real *vtilde) {
     for (int a = 0; a < D; a++) vbar[a] = (sm_real)v[a];
     if (rec->count > 0) {
-        (void)sm_friction_node(gc->cols, D, xi, rec, dv, v);
+        sm_friction_node(gc->cols, D, xi, rec, dv, v);
         if (gc->static_sticks)
             for (int a = 0; a < D; a++) vbar[a] = (sm_real)v[a];
     }

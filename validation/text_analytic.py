@@ -179,6 +179,27 @@ at elastic_cfl 0.5, 0.6, 0.65 and 0.7 (float Release; 7.2, 20.7 and 25.7 mm at 0
 with the old rule), so the default elastic_cfl is now 0.6 (docs/benchmarks.md, "Time-step
 limit, second look").
 
+**Tried (2026-12-07, an experiment, not in the program): contact where the material is.**
+docs/experiments/material-aware-contact.patch (on d8f0300) gives every grid node, before the grid
+update, the smallest φ of the first collider over the particles whose stencil holds the node, and
+leaves that collider out of the node's collisions while the gap exceeds a threshold, if the
+collider separates. Measured with `sm_validate incline` (double build, max Δt 2e-5 s, the
+table's geometry) and a threshold of 0.35 dx: **all 16 cases within 1e-3** — tilted μ = 0.5
+−6.8e-4, aligned μ = 0.5 +4.8e-5 (+5.9e-3 without it), shifted μ = 0.5 −1.7e-5, the frictionless
+cases within 4e-13 —, and the μ = 0.7 blocks hold on every plane: below 5e-6 m/s at 1.2 s, the
+aligned block's centre of mass steady to 1 µm (no ratchet). With 0.26 dx (about the particle
+radius, 0.25 dx at 4 per cell) the aligned case was as good (+1.3e-4), but test_incline's block on
+a separating tilted plane slid 0.17–0.37 m: the contact flickered while the bottom layer settled
+just beyond the threshold. With 0.35 dx that block moved 9.8 mm in 1 s at elastic_cfl 0.6 and 0.7
+(23 mm without the rule); with 0.5 dx the three μ = 0.5 cases were within 8.3e-4. The 2D collapse at a = 2,
+n = 12 on the Coulomb base (μ = 0.5, float) ran out 3.43 against 3.39, height 1.09 both. Not in
+the program because the minimum comes from the particles of the node's stencil: across MPI ranks
+it needs a minimum over the halo, or the summed equivalent, the particle mass within the threshold
+(Σ w m over the particles with φ ≤ the threshold is positive exactly when the minimum is within it,
+since the weights are positive on the stencil), which P2G's halo sum would carry; it costs a φ per particle near a collider every
+step; several colliders need a gap each; the implicit solve's contact set has to follow it; and
+every scene with a separating collider changes.
+
 Near the threshold the friction the grid delivers depends on how the normal support is spread over
 the contact nodes: the per-node Coulomb rule (3.102 applied node by node, as the thesis and the peers
 do) lets each contact node remove at most μ times its own normal impulse. A dump

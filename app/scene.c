@@ -14,6 +14,7 @@
  *   fps = 24    frames = N | end_time = s (one of them, required)
  *   gravity = {0, -9.81, 0}   seed = whole number >= 0 (1)
  *   static_friction_sticks = bool   particle_projection = bool
+ *   contact_gap = cells > 0 | false (the default: no contact gate)
  *   domain = { min = {..}, max = {..}, walls = "sticky" | "slip" | "separate", wall_friction = mu }
  *   materials = { NAME = { model = "sand" | "elastic" ("sand"), density, E, nu,
  *                          friction_angle = degrees | repose_angle = degrees | hardening = {h0, h1, h2, h3}

@@ -1132,7 +1132,7 @@ static void test_collide_among(void) {
         if (dim == 3) x[2] = sm_test_uniform(&rng, -0.1, 0.1);
         double va[3] = {v[0], v[1], v[2]}, vf[3] = {v[0], v[1], v[2]};
         sm_node_contact ra, rf;
-        const int redo = sm_collide_node_among(cs, which, 1, dim, x, dt, vcap2, va, &ra);
+        const int redo = sm_collide_node_among(cs, which, 1, dim, x, dt, vcap2, SM_GATE_OPEN, va, &ra);
         sm_collide_node(cs, 2, dim, x, dt, vf, &rf);
         const int equal = memcmp(va, vf, sizeof va) == 0 && ra.sticky == rf.sticky && ra.count == rf.count;
         wall_reached += rf.count > 0;

@@ -108,6 +108,7 @@ static void test_valid3d(void) {
     CHECK(d->wall_mode == SM_COLLIDE_SLIP);
     CHECK_NEAR(d->wall_friction, 0.25, 0);
     CHECK(d->static_friction_sticks == 0 && d->particle_projection == 0);
+    CHECK_NEAR(d->contact_gap, 0.5, 0);
     CHECK(d->threads == 1);
     /* materials through particle masses (m = rho dx^3 / ppc) and the friction angle */
     size_t nsand, nrub;
@@ -388,6 +389,9 @@ static const bad_case bad[] = {
      {"emitters[1].shape: outside the domain"}},
     {"return { dx = 0.1,\n" OK3 MAT OBJ "  camera = { eye = {1, 1, 1} } }\n", {"camera.target: required"}},
     {"return { dx = 0.1,\n" OK3 MAT OBJ "  outputs = { ply = 1 } }\n", {"outputs.ply: expected true or false, got number"}},
+    {"return { dx = 0.1,\n" OK3 MAT OBJ "  contact_gap = 0 }\n", {"bad.lua:5: contact_gap: must be > 0, got 0"}},
+    {"return { dx = 0.1,\n" OK3 MAT OBJ "  contact_gap = 'wide' }\n", {"contact_gap: expected a number, got string"}},
+    {"return { dx = 0.1,\n" OK3 MAT OBJ "  contact_gap = true }\n", {"bad.lua:5: contact_gap: expected a number of cells or false, got true"}},
     /* runtime errors and the sandbox */
     {"local x = nil\nreturn { dx = x.y }\n", {"bad.lua:2: attempt to index a nil value (local 'x')"}},
     {"error('custom failure')\n", {"bad.lua:1: custom failure"}},
@@ -1116,7 +1120,23 @@ static void test_lines(void) {
     }
 }
 
+/* contact_gap: the default, a number in cells, and false for no gate (infinite). */
+static void test_contact_gap(void) {
+    const char *const src[3] = {"", "contact_gap = 0.7,", "contact_gap = false,"};
+    const double want[3] = {INFINITY, 0.7, INFINITY};
+    for (int i = 0; i < 3; i++) {
+        char text[1024];
+        snprintf(text, sizeof text, "return { dx = 0.1, %s\n" OK3 MAT OBJ "}\n", src[i]);
+        sm_scene *s = NULL;
+        err[0] = 0;
+        CHECK(sm_scene_load("gap.lua", text, NULL, 0, NULL, 1, &s, err, sizeof err) == SM_OK);
+        if (s) CHECK(sm_scene_world_def(s)->contact_gap == want[i]);
+        sm_scene_destroy(s);
+    }
+}
+
 int main(void) {
+    test_contact_gap();
     test_valid3d();
     test_valid2d();
     test_params_quality();

@@ -13,6 +13,8 @@
  *       "the fit window"); the slope is long enough for the fastest case to stay on it. max_dt =
  *       2e-5 s (fine; one case also at 1e-4 s; 3D at 1e-4 s, tilted only). --quick: the first two
  *       cases per set-up fitted over [0.05 s, 0.15 s] on the short slope (the CTest subset).
+ *   sm_validate incline_gate [--quick]   the same with the contact gate, contact_gap = 0.35 cells
+ *       (sm_world_def.contact_gap; off by default).
  *   sm_validate column [--quick]    gravity-loaded elastic column, 2D plane strain: width H/4
  *       between slip walls on a slip base, H = 1 m, rho 1000, E 1e7, nu 0.3 (strain 1e-3), released
  *       stress free (explicit steps). Uniaxial strain: sigma_yy = -rho g (H - y), sigma_xx / sigma_yy
@@ -48,6 +50,10 @@ static int fail(const char *what, sm_world *w) {
 /* The incline's set-ups, in the order of the table. */
 enum { INCLINE_TILTED, INCLINE_ALIGNED, INCLINE_SHIFTED, INCLINE_SETUPS };
 
+/* The contact gate of the incline runs (sm_world_def.contact_gap): `sm_validate incline_gate` runs the
+ * same table with 0.35 cells. */
+static double incline_gap = INFINITY;
+
 /* One block-on-incline run (setup: INCLINE_*); returns the acceleration along the slope fitted
  * over [t0, t_end]. `extra` (m) lengthens the slope above the plane's
  * anchor p0: the block starts that much farther up it. */
@@ -59,6 +65,7 @@ static double incline_run(int dim, double th_deg, double mu, int setup, sm_colli
     def.dim = dim;
     def.dx = dim == 2 ? 0.01 : 0.02;
     def.max_dt = max_dt;
+    def.contact_gap = incline_gap;
     def.domain_max[0] = 2.5 + extra; /* the aligned block's upper end (1.6 + 0.3 + extra + 0.1) clear of the wall */
     def.domain_max[1] = 1.3 + (tilted ? extra * sin(th) : 0);
     def.domain_max[2] = 0.3;
@@ -318,10 +325,11 @@ static void shear(int quick) {
 int main(int argc, char **argv) {
     int quick = argc > 2 && !strcmp(argv[2], "--quick");
     if (argc >= 2 && !strcmp(argv[1], "incline")) incline(quick);
+    else if (argc >= 2 && !strcmp(argv[1], "incline_gate")) incline_gap = 0.35, incline(quick);
     else if (argc >= 2 && !strcmp(argv[1], "column")) column(quick);
     else if (argc >= 2 && !strcmp(argv[1], "shear")) shear(quick);
     else {
-        fprintf(stderr, "usage: sm_validate incline|column|shear [--quick]\n");
+        fprintf(stderr, "usage: sm_validate incline|incline_gate|column|shear [--quick]\n");
         return 2;
     }
     return 0;

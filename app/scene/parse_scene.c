@@ -15,7 +15,7 @@ static const char *const keys_top[] = {"dim", "dx", "ppc", "kernel", "transfer",
                                        "max_dt", "elastic_cfl", "newton_tolerance", "newton_max_iterations",
                                        "gmres_max_iterations", "gmres_tolerance", "gmres_preconditioner", "fps", "frames", "end_time", "checkpoint_every",
                                        "gravity", "seed", "domain",
-                                       "static_friction_sticks", "particle_projection", "materials", "objects",
+                                       "static_friction_sticks", "particle_projection", "contact_gap", "materials", "objects",
                                        "colliders", "emitters", "outputs", "camera"};
 static const char *const keys_domain[] = {"min", "max", "walls", "wall_friction"};
 static const char *const keys_out[] = {"ply", "vtk", "csv", "up"};
@@ -35,8 +35,24 @@ static void check_world_def(vctx *v) {
                                       "newton_max_iterations", "newton_max_iterations", "gmres_max_iterations",
                                       "gmres_max_iterations", "gmres_tolerance", "gmres_tolerance", "cfl", "cfl",
                                       "max_dt", "max_dt", "elastic_cfl", "elastic_cfl", "wall_mode", "domain.walls",
-                                      "wall_friction", "domain.wall_friction", NULL};
+                                      "wall_friction", "domain.wall_friction", "contact_gap", "contact_gap", NULL};
     sc_fail_library(v, msg, map);
+}
+
+/* contact_gap = cells (> 0) | false (no contact gate: every node with mass meets every collider, as
+ * the thesis; the default). */
+static void parse_contact_gap(vctx *v, int top, sm_world_def *d) {
+    const int ty = sc_get(v, top, "contact_gap");
+    lua_pop(v->L, 1);
+    if (ty == LUA_TBOOLEAN) {
+        if (sc_bool_field(v, top, "contact_gap", 0)) {
+            sc_push_key(v, "contact_gap");
+            sc_fail(v, "expected a number of cells or false, got true");
+        }
+        d->contact_gap = INFINITY;
+        return;
+    }
+    d->contact_gap = sc_num_field(v, top, "contact_gap", d->contact_gap, NULL, SC_GT0);
 }
 
 /* dim (checked at once: the vectors that follow have dim components), dx and the solver's
@@ -74,6 +90,7 @@ static double parse_world_numbers(vctx *v, int top) {
     }
     d->static_friction_sticks = sc_bool_field(v, top, "static_friction_sticks", d->static_friction_sticks);
     d->particle_projection = sc_bool_field(v, top, "particle_projection", d->particle_projection);
+    parse_contact_gap(v, top, d);
     return ppc;
 }
 

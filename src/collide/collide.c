@@ -424,7 +424,7 @@ void sm_collider_velocity(const sm_collider *c, int dim, const double x[3], doub
 
 void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3], double dt,
                      double v[3], sm_node_contact *rec) {
-    (void)sm_collide_node_among(cs, NULL, nc, dim, xi, dt, INFINITY, v, rec);
+    (void)sm_collide_node_among(cs, NULL, nc, dim, xi, dt, INFINITY, SM_GATE_OPEN, v, rec);
 }
 
 /* |v|^2 > vcap2 (dim components). */
@@ -435,13 +435,14 @@ static int faster_than(const double v[3], int dim, double vcap2) {
 }
 
 int sm_collide_node_among(const sm_collider *cs, const int *which, int count, int dim, const double xi[3], double dt,
-                          double vcap2, double v[3], sm_node_contact *rec) {
+                          double vcap2, unsigned gate, double v[3], sm_node_contact *rec) {
     SM_ASSERT(dt > 0.0);
     rec->sticky = -1;
     rec->count = 0;
     for (int i = 0; i < count; i++) {
         const int b = which ? which[i] : i;
         const sm_collider *c = &cs[b];
+        if (c->def.mode == SM_COLLIDE_SEPARATE && !(gate & sm_gate_bit(b))) continue; /* no material near */
         double xhat[3];
         for (int k = 0; k < 3; k++) xhat[k] = xi[k] + dt * v[k];
         double phi0 = sm_collider_phi(c, dim, 0, xi, NULL);

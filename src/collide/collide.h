@@ -81,13 +81,20 @@ typedef struct sm_node_contact {
 void sm_collide_node(const sm_collider *cs, int nc, int dim, const double xi[3], double dt,
                      double v[3], sm_node_contact *rec);
 
+/* The contact gate of a node (grid_collide.h, def.contact_gap): bit sm_gate_bit(b) set when material
+ * lies within the gap of collider b. Colliders from index 7 on share the last bit. A separating
+ * collider acts on a node only through an open bit; sticky and slip colliders always act. */
+#define SM_GATE_OPEN 0xffu
+static inline unsigned sm_gate_bit(int b) { return 1u << (b < 7 ? b : 7); }
+
 /* The same over the colliders which[0 .. count-1] only (ascending indices into cs; the contacts name
- * the index into cs). Returns 1, the result then void, if a collider left v faster than
- * sqrt(vcap2): the caller's bound, which showed that the colliders left out cannot act on a node
- * moving at most that fast in this step (grid_collide_dim.c), no longer covers it. When it
- * returns 0 the result is sm_collide_node's over all colliders. */
+ * the index into cs; which NULL: 0 .. count-1), with the node's contact gate (SM_GATE_OPEN: every
+ * collider). Returns 1, the result then void, if a collider left v faster than sqrt(vcap2): the
+ * caller's bound, which showed that the colliders left out cannot act on a node moving at most
+ * that fast in this step (grid_collide_dim.c), no longer covers it. When it returns 0 the result
+ * is that of all colliders (with the same gate). */
 int sm_collide_node_among(const sm_collider *cs, const int *which, int count, int dim, const double xi[3], double dt,
-                          double vcap2, double v[3], sm_node_contact *rec);
+                          double vcap2, unsigned gate, double v[3], sm_node_contact *rec);
 
 /* FRICTION for one node: v (in: v-bar, out: v-tilde); dv = v-bar - v* is the collision impulse per
  * unit mass. For each recorded slip/separate collision b with normal n, relative velocity

@@ -17,6 +17,7 @@
 
 #include "collide/collide.h"
 #include "core/step_ctx.h"
+#include "grid/bin.h"
 #include "grid/grid.h"
 
 /* The colliders as the grid sees them. */
@@ -24,9 +25,39 @@ typedef struct sm_grid_colliders {
     const sm_collider *cols; /* user colliders, then the domain walls */
     int count;
     int static_sticks;       /* def.static_friction_sticks: v-bar = v-tilde at nodes with contacts */
+    const uint8_t *gate;     /* per node of the live blocks, the contact gate (below); NULL: every
+                                collider acts on every node (def.contact_gap infinite) */
 } sm_grid_colliders;
 
+/* The contact gate (def.contact_gap): a separating collider acts on a grid node only where there
+ * is material near it. Bit sm_gate_bit(b) (collide.h) of gate[node] is set when a particle whose
+ * stencil holds the node lies within `gap` of collider b, at t^n (phi_b at pose 0 of x_p) or at
+ * t^{n+1} as it moves (phi_b at pose 1 of x_p + dt v_p). A node's mass reaches 1.5 dx (quadratic)
+ * or 2 dx (cubic) beyond the particles; without the gate those nodes touched a wall while the
+ * material was still up to that far from it, and their contact stopped it there: a block resting on
+ * a grid-aligned plane held its bottom layer off the plane and slid 0.6% fast at mu 0.5, a block at
+ * rest at mu 0.7 kept sliding (docs/validation.md section 6). Sticky and slip colliders bind the
+ * material at their nodes (Algorithm 7) and are not gated.
+ *
+ * The gate is an OR over particles, so it does not depend on their order, the thread count or
+ * (with ghosts, dist.h) the rank count. */
+typedef struct sm_contact_gate_io {
+    size_t n;              /* particles (with MPI: owned, then ghosts) */
+    const double *x;       /* positions, n * d */
+    const sm_real *v;      /* velocities v^n, n * d */
+    const sm_bins *bins;   /* this step's binning (every particle binned) */
+    const sm_grid *grid;
+    sm_grid_colliders colliders;
+    double gap;            /* m: contact_gap dx */
+    uint8_t *gate;         /* out: per node of the live blocks */
+} sm_contact_gate_io;
+
 #ifdef SM_DIM
+/* Fills io->gate (every node of the live blocks: zeroed, then opened where material is near). A
+ * particle moves at most cfl dx <= dx in the step (the start-of-step check refuses a dt that
+ * would move one further), which bounds where a particle block's particles can be. */
+void SM_FN(sm_contact_gate)(const sm_contact_gate_io *io, const sm_step_ctx *c);
+
 /* Explicit grid update's collision pass over live block `slot` (stage 5): every node with mass
  * holds v* in vbar on entry; leaves v-bar in vbar and v-tilde in vtilde. Returns at once when no
  * collider can reach the block this step (vmax2: the square of the block's largest |v*|). */

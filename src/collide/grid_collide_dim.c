@@ -35,6 +35,11 @@ static inline void node_friction(const sm_grid_colliders *gc, const double xi[3]
     for (int a = 0; a < D; a++) vtilde[a] = (sm_real)v[a];
 }
 
+/* Node ni's contact gate (grid_collide.h). */
+static inline unsigned node_gate(const sm_grid_colliders *gc, size_t ni) {
+    return gc->gate ? gc->gate[ni] : SM_GATE_OPEN;
+}
+
 /* Centre of grid block `slot` (m) and its half-diagonal. */
 static inline double block_center(const sm_grid *g, const sm_step_ctx *c, size_t slot, double ctr[3]) {
     int bc[3];
@@ -84,11 +89,12 @@ void SM_FN(sm_grid_collide_block)(const sm_grid_colliders *gc, const sm_grid *g,
         node_position(g, c, ni, xi);
         for (int a = 0; a < D; a++) v[a] = vstar[a] = (double)vbar[ni * D + a];
         sm_node_contact rec;
+        const unsigned gate = node_gate(gc, ni);
         /* The far colliders are left out while the node moves no faster than the bound assumed
          * (a collider that speeds it up hands it to the full pass, from v* again). */
-        if (nnear < 0 || sm_collide_node_among(gc->cols, near, nnear, D, xi, c->dt, vmax2, v, &rec)) {
+        if (nnear < 0 || sm_collide_node_among(gc->cols, near, nnear, D, xi, c->dt, vmax2, gate, v, &rec)) {
             for (int a = 0; a < D; a++) v[a] = vstar[a];
-            sm_collide_node(gc->cols, gc->count, D, xi, c->dt, v, &rec);
+            (void)sm_collide_node_among(gc->cols, NULL, gc->count, D, xi, c->dt, INFINITY, gate, v, &rec);
         }
         for (int a = 0; a < 3; a++) dv[a] = v[a] - vstar[a];
         node_friction(gc, xi, &rec, dv, v, vbar + ni * D, vtilde + ni * D);
@@ -107,7 +113,7 @@ void SM_FN(sm_grid_collide_vector)(const sm_grid_colliders *gc, const sm_grid *g
         double xi[3], v[3] = {0, 0, 0};
         node_position(g, c, (size_t)l, xi);
         for (int a = 0; a < D; a++) v[a] = (double)z[l * D + a];
-        sm_collide_node(gc->cols, gc->count, D, xi, c->dt, v, r);
+        (void)sm_collide_node_among(gc->cols, NULL, gc->count, D, xi, c->dt, INFINITY, node_gate(gc, (size_t)l), v, r);
         for (int a = 0; a < D; a++) z[l * D + a] = (sm_real)v[a];
     }
 }

@@ -5,6 +5,7 @@
 #ifndef SM_INTEGRATE_STAGES_H
 #define SM_INTEGRATE_STAGES_H
 
+#include "collide/grid_collide.h"
 #include "integrate/explicit.h"
 #include "integrate/implicit_solver.h"
 #include "material/plasticity.h"
@@ -18,6 +19,8 @@ typedef struct sm_stages {
     sm_status (*bin_more)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c, size_t first);
     /* 3. P2G: mass, momentum and (explicit) force (transfer/transfer.h). */
     void (*p2g)(const sm_p2g_io *io, const sm_step_ctx *c);
+    /* 4. Which nodes have material near each separating collider (collide/grid_collide.h). */
+    void (*contact_gate)(const sm_contact_gate_io *io, const sm_step_ctx *c);
     /* 4-5. Explicit: v* = v^n + dt (f/m + g), collisions (v-bar), friction (v-tilde)
      * (integrate/explicit.h). */
     void (*grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c);

@@ -9,6 +9,7 @@ const sm_stages SM_FN(sm_stages) = {
     .bin = SM_FN(sm_bin_particles),
     .bin_more = SM_FN(sm_bin_more),
     .p2g = SM_FN(sm_p2g),
+    .contact_gate = SM_FN(sm_contact_gate),
     .grid_update = SM_FN(sm_grid_update),
     .implicit_solve = SM_FN(sm_implicit_solve),
     .implicit_jvp_check = SM_FN(sm_implicit_jvp_check),

@@ -18,6 +18,7 @@
  * stage gets its own argument struct, made here from the world (*_io below): exactly the arrays
  * it reads and writes, named for what they hold (grid.h's lifetime table). Every stage is timed
  * into stage_seconds (Box2D's b2Profile). */
+#include <math.h>
 #include <string.h>
 
 #include "core/timer.h"
@@ -58,7 +59,8 @@ static void lap(sm_world *w, sm_stage s, double *t) {
 static size_t owned(const sm_world *w) { return w->dist ? sm_dist_owned(w) : w->p.n; }
 
 static sm_grid_colliders grid_colliders(const sm_world *w) {
-    sm_grid_colliders gc = {w->colliders, w->ncolliders + w->nwalls, w->def.static_friction_sticks};
+    sm_grid_colliders gc = {w->colliders, w->ncolliders + w->nwalls, w->def.static_friction_sticks,
+                            w->gate_live ? w->gate : NULL};
     return gc;
 }
 
@@ -190,7 +192,31 @@ static void refuse_step(sm_world *w, double dt) {
  * (retried at half the dt); at or below it, it is taken and counted as unconverged. */
 #define SM_IMPLICIT_REJECT_FRACTION (1.0 / 1024)
 
+/* 4. The contact gate of this step's nodes (collide/grid_collide.h) into w->gate, unless
+ * def.contact_gap is infinite or no collider separates. */
+static sm_status contact_gate(sm_world *w, const sm_step_ctx *c) {
+    w->gate_live = 0;
+    int separating = 0;
+    for (int b = 0; b < w->ncolliders + w->nwalls; b++) separating |= w->colliders[b].def.mode == SM_COLLIDE_SEPARATE;
+    if (!separating || isinf(w->def.contact_gap)) return SM_OK;
+    const size_t nodes = w->grid.nactive * (size_t)w->grid.block_nodes;
+    if (nodes > w->gate_cap) {
+        const size_t cap = w->grid.cap * (size_t)w->grid.block_nodes; /* grows as the grid's storage */
+        uint8_t *g = sm_realloc(w->gate, cap);
+        if (!g) return sm_world_fail(w, SM_ERR_NOMEM, "contact gate: out of memory for %zu grid nodes", nodes);
+        w->gate = g;
+        w->gate_cap = cap;
+    }
+    const sm_contact_gate_io io = {w->p.n, w->p.x, w->p.v, &w->bins, &w->grid, grid_colliders(w),
+                                   w->def.contact_gap * w->def.dx, w->gate};
+    w->stages->contact_gate(&io, c);
+    w->gate_live = 1;
+    return SM_OK;
+}
+
 static sm_status grid_velocities(sm_world *w, const sm_step_ctx *c) {
+    const sm_status gated = contact_gate(w, c);
+    if (gated != SM_OK) return gated;
     if (w->def.integrator != SM_INTEGRATOR_IMPLICIT) {
         const sm_grid_update_io io = grid_update_io(w);
         w->stages->grid_update(&io, c);

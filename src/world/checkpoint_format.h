@@ -4,7 +4,10 @@
 #define SM_WORLD_CHECKPOINT_FORMAT_H
 
 #define CKPT_MAGIC "SANDMPMC"
-#define CKPT_VERSION 3u /* 2: positions are double in both builds (particles.h); 3: gmres_preconditioner, implicit stats */
+#define CKPT_VERSION 4u /* 2: positions are double in both builds (particles.h); 3: gmres_preconditioner, implicit stats;
+                          4: contact_gap (the world definition's last field) */
+#define CKPT_VERSION_OLDEST 3u /* version 3 is read too: its definition lacks contact_gap, taken as INFINITY
+                                  (no contact gate: the run resumes as it was made) */
 #define CKPT_ENDIAN 0x01020304u
 #define CKPT_MAX_NAME 32
 

@@ -1,6 +1,8 @@
 /* Reading a checkpoint stream (sandmpm.h: sm_world_load, sm_world_restore, sm_world_restore_read;
  * sandmpm_mpi.h: sm_world_restore_share through a filter). What is saved, derived and scratch:
  * checkpoint.c. */
+#include <math.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -81,8 +83,8 @@ static sm_status read_header(reader *r, sm_world_def *def, char *err, size_t err
     const uint32_t version = get_u32(r), endian = get_u32(r), real = get_u32(r), dim = get_u32(r);
     char msg[160];
     if (r->short_read) return bad(err, errlen, "truncated in the header");
-    if (version != CKPT_VERSION) {
-        snprintf(msg, sizeof msg, "format version %u, this build reads %u", version, CKPT_VERSION);
+    if (version < CKPT_VERSION_OLDEST || version > CKPT_VERSION) {
+        snprintf(msg, sizeof msg, "format version %u, this build reads %u to %u", version, CKPT_VERSION_OLDEST, CKPT_VERSION);
         return bad(err, errlen, msg);
     }
     if (endian != CKPT_ENDIAN) return bad(err, errlen, "written on a machine of another byte order");
@@ -91,7 +93,8 @@ static sm_status read_header(reader *r, sm_world_def *def, char *err, size_t err
                  sizeof(sm_real) == 8 ? "double" : "float");
         return bad(err, errlen, msg);
     }
-    get(r, def, sizeof *def);
+    get(r, def, version == 3 ? offsetof(sm_world_def, contact_gap) : sizeof *def);
+    if (version == 3) def->contact_gap = INFINITY;
     if (r->short_read) return bad(err, errlen, "truncated in the world definition");
     if (dim != 2 && dim != 3) return bad(err, errlen, "dimension is not 2 or 3");
     if ((uint32_t)def->dim != dim) return bad(err, errlen, "dimension of the header and the definition differ");

@@ -69,6 +69,7 @@ sm_world_def sm_world_def_default(void) {
     d.elastic_cfl = 0.6; /* 0.65 of the smallest measured limit, 0.92 (bench/elastic_limit.c); a block released on an incline creeps more above it (docs/benchmarks.md, "Time-step limit") */
     d.wall_mode = SM_COLLIDE_SEPARATE;
     d.wall_friction = 0;
+    d.contact_gap = INFINITY; /* no gate: 0.35 passes the incline at fine steps, but not a resting block at the elastic dt (sandmpm.h) */
     d.newton_tolerance = 1e-3;
     d.newton_max_iterations = 20;
     d.gmres_max_iterations = 15;
@@ -111,6 +112,7 @@ sm_status sm_world_def_check(const sm_world_def *def, char *err, size_t errlen) 
     else if (!(def->elastic_cfl >= 0) || !isfinite(def->elastic_cfl)) snprintf(msg, sizeof msg, "elastic_cfl: must be >= 0, got %g", def->elastic_cfl);
     else if (def->wall_mode != SM_COLLIDE_STICKY && def->wall_mode != SM_COLLIDE_SLIP && def->wall_mode != SM_COLLIDE_SEPARATE) snprintf(msg, sizeof msg, "wall_mode: unknown value %d", (int)def->wall_mode);
     else if (!(def->wall_friction >= 0) || !isfinite(def->wall_friction)) snprintf(msg, sizeof msg, "wall_friction: must be >= 0, got %g", def->wall_friction);
+    else if (!(def->contact_gap > 0)) snprintf(msg, sizeof msg, "contact_gap: must be > 0 (cells; inf: no gate), got %g", def->contact_gap);
     if (!msg[0]) {
         for (int a = 0; a < def->dim; a++) {
             double len = def->domain_max[a] - def->domain_min[a];
@@ -209,6 +211,7 @@ size_t sm_world_memory_bytes(const sm_world *w) {
     b += (size_t)w->mats_cap * sizeof(sm_material_rt) + (size_t)w->colliders_cap * sizeof(sm_collider);
     b += (size_t)w->emitters_cap * sizeof(sm_emitter) + w->emit_cap * 6 * sizeof(double);
     b += sm_implicit_ws_bytes(&w->imp, w->dim);
+    b += w->gate_cap;
     return b;
 }
 
@@ -219,6 +222,7 @@ void sm_world_destroy(sm_world *w) {
     sm_grid_free(&w->grid);
     sm_transfer_cache_free(&w->cache);
     sm_implicit_ws_free(&w->imp);
+    free(w->gate);
     sm_dist_free(w->dist);
     free(w->mats);
     for (int i = 0; i < w->ncolliders; i++) sm_collider_release_meshes(&w->colliders[i]);

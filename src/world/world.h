@@ -62,6 +62,9 @@ struct sm_world {
     sm_bins bins;
     sm_transfer_cache cache;
     sm_implicit_ws imp;
+    uint8_t *gate;           /* the contact gate per node of the live blocks (collide/grid_collide.h) */
+    size_t gate_cap;         /* nodes gate holds */
+    int gate_live;           /* 1: gate holds this step's gate; 0: no gate (every collider acts everywhere) */
     sm_dist *dist;           /* a distributed world's part (dist/dist.h); NULL on one rank */
 
     /* Time and statistics. */

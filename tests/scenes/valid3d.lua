@@ -7,7 +7,7 @@ return {
   integrator = "explicit", cfl = 0.5, max_dt = 5e-4, elastic_cfl = 0.4,
   fps = 30, end_time = 0.5,
   gravity = {0, -5, 0}, seed = 7,
-  static_friction_sticks = false, particle_projection = false,
+  static_friction_sticks = false, particle_projection = false, contact_gap = 0.5,
   domain = { min = {0, 0, 0}, max = {0.6, 0.5, 0.4}, walls = "slip", wall_friction = 0.25 },
   materials = {
     sand = { model = "sand", density = 2000, E = 2e5, nu = 0.25, friction_angle = 30 },

@@ -195,7 +195,7 @@ A grid node's mass reaches 1.5 dx (quadratic kernel) beyond the particles, so a 
 wall while the material is still that far from it, and its contact then stops the material short of
 the wall. `contact_gap` (sm_world_def, the scene key of the same name; cells) lets a separating
 collider act on a node only when a particle whose stencil holds the node lies within contact_gap dx
-of it, at the step's start or at x_p + Δt v_p at its end (src/collide/contact_gate_dim.c). The gate
+of it at the step's end as it moves now (φ at x_p + Δt v_p; src/collide/contact_gate_dim.c). The gate
 is an OR over particles: the same for any thread count, and with the ghosts for any number of MPI
 ranks; only the particle blocks whose box comes within the gap of a separating collider are
 looked at; the implicit solve's contact set follows it; sticky and slip colliders are never gated.

@@ -183,7 +183,7 @@ typedef struct sm_world_def {
     size_t max_particles;    /**< refuse to grow beyond this many particles; 0 = no limit. */
     double contact_gap;      /**< the contact gate, in cells (dx): a separating collider (and separating domain
                                   walls) acts on a grid node only if a particle whose stencil holds the node
-                                  lies within contact_gap dx of it, at the step's start or as it moves. A
+                                  lies within contact_gap dx of it at the end of the step as it moves now. A
                                   node's mass reaches 1.5 dx (quadratic) or 2 dx (cubic) beyond the
                                   particles, so without the gate material is stopped up to that far short
                                   of a wall. Default INFINITY: no gate (every node with mass meets every

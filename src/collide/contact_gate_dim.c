@@ -1,16 +1,17 @@
 /* The contact gate (grid_collide.h, def.contact_gap), compiled for SM_DIM = 2 and 3.
  *
  * For node i and separating collider b:
- *   gate_i has bit(b)  <=>  some particle p with i in its stencil has
- *                           min(phi_b^n(x_p), phi_b^{n+1}(x_p + dt v_p)) <= gap.
- * The stencil is the kernel's (3.18)-(3.21): S = 3 (quadratic) or 4 (cubic) nodes per axis from
- * the base node (kernel.h), the same nodes P2G gives mass to, whatever their weight.
+ *   gate_i has bit(b)  <=>  some particle p with i in its stencil has phi_b^{n+1}(x_p + dt v_p) <= gap,
+ * the particle's distance from the collider at the end of the step as it moves now. The stencil is
+ * the kernel's (3.18)-(3.21): S = 3 (quadratic) or 4 (cubic) nodes per axis from the base node
+ * (kernel.h), the same nodes P2G gives mass to, whatever their weight.
  *
  * A particle block b (grid/bin.h) holds the particles whose base node lies in grid block b: per
  * axis X in [4 b + 1/2, 4 b + 9/2) (quadratic) or [4 b + 1, 4 b + 5) (cubic) in cells, a box of
- * half-width 2 dx, and X + dt v in that box grown by dx. A block whose boxes lie farther than the
- * gap from collider b (sm_collider_phi_box, a lower bound) has no particle to open bit(b), and
- * none of its particles is looked at. */
+ * half-width 2 dx, and X + dt v in that box grown by dx. A block whose box lies farther than the
+ * gap from collider b (sm_collider_phi_box, a lower bound) has no particle to open bit(b), and none
+ * of its particles is looked at. A collider of one half-space has a linear phi: per particle it is
+ * a dot product with the coefficients taken once per step (to rounding the same value). */
 #include "core/dim.h"
 
 #include <math.h>
@@ -19,41 +20,65 @@
 #include "collide/grid_collide.h"
 #include "transfer/kernel.h"
 
-/* Bits of the separating colliders whose gap the boxes of particle block `pb` may reach. */
+/* The separating colliders of a step: whether each is a single half-space, and then phi(x) =
+ * phi0 + grad . (x - origin) at pose 1. Colliders from GATE_CAP on are evaluated in full. */
+enum { GATE_CAP = 32 };
+typedef struct gate_cols {
+    int count;
+    double origin[3];
+    int linear[GATE_CAP];
+    double phi0[GATE_CAP], grad[GATE_CAP][3];
+} gate_cols;
+
+static void gate_cols_init(const sm_contact_gate_io *io, const sm_step_ctx *c, gate_cols *g) {
+    g->count = io->colliders.count;
+    for (int a = 0; a < 3; a++) g->origin[a] = a < D ? c->pos_lo[a] : 0;
+    for (int b = 0; b < g->count && b < GATE_CAP; b++) {
+        const sm_collider *cb = &io->colliders.cols[b];
+        g->linear[b] = cb->def.shape_count == 1 && cb->def.shapes[0].kind == SM_SHAPE_HALFSPACE && !cb->animated;
+        g->phi0[b] = sm_collider_phi(cb, D, 1, g->origin, g->grad[b]);
+    }
+}
+
+/* phi of collider b at pose 1 of x. */
+static inline double gate_phi(const sm_contact_gate_io *io, const gate_cols *g, int b, const double x[3]) {
+    if (b < GATE_CAP && g->linear[b]) {
+        double s = g->phi0[b];
+        for (int a = 0; a < D; a++) s += g->grad[b][a] * (x[a] - g->origin[a]);
+        return s;
+    }
+    return sm_collider_phi(&io->colliders.cols[b], D, 1, x, NULL);
+}
+
+/* Bits of the separating colliders whose gap the box of particle block `pb` may reach. */
 static unsigned block_reach(const sm_contact_gate_io *io, const sm_step_ctx *c, const sm_pblock *pb) {
     int bc[3];
     sm_block_coords(pb->key, bc);
     const double dx = c->pos_dx, off = c->stencil == 3 ? 2.5 : 3.0;
-    double ctr[3] = {0, 0, 0}, h0[3] = {0, 0, 0}, h1[3] = {0, 0, 0};
+    double ctr[3] = {0, 0, 0}, half[3] = {0, 0, 0};
     for (int a = 0; a < D; a++) {
         ctr[a] = c->pos_lo[a] + ((double)(bc[a] << SM_BLOCK_BITS) + off) * dx;
-        h0[a] = 2.0 * dx;
-        h1[a] = 3.0 * dx;
+        half[a] = 3.0 * dx;
     }
     unsigned bits = 0;
     for (int b = 0; b < io->colliders.count; b++) {
         const sm_collider *cb = &io->colliders.cols[b];
         if (cb->def.mode != SM_COLLIDE_SEPARATE || (bits & sm_gate_bit(b))) continue;
-        if (sm_collider_phi_box(cb, D, 0, ctr, h0) <= io->gap || sm_collider_phi_box(cb, D, 1, ctr, h1) <= io->gap)
-            bits |= sm_gate_bit(b);
+        if (sm_collider_phi_box(cb, D, 1, ctr, half) <= io->gap) bits |= sm_gate_bit(b);
     }
     return bits;
 }
 
-/* Bits (among `reach`) of the colliders within the gap of particle q, now or as it moves. */
-static unsigned particle_bits(const sm_contact_gate_io *io, const sm_step_ctx *c, size_t q, unsigned reach) {
-    double x0[3] = {0, 0, 0}, x1[3] = {0, 0, 0};
-    for (int a = 0; a < D; a++) {
-        x0[a] = io->x[q * D + a];
-        x1[a] = x0[a] + c->dt * (double)io->v[q * D + a];
-    }
+/* Bits (among `reach`) of the colliders within the gap of particle q at the end of the step. */
+static unsigned particle_bits(const sm_contact_gate_io *io, const sm_step_ctx *c, const gate_cols *g, size_t q,
+                              unsigned reach) {
+    double x1[3] = {0, 0, 0};
+    for (int a = 0; a < D; a++) x1[a] = io->x[q * D + a] + c->dt * (double)io->v[q * D + a];
     unsigned bits = 0;
     for (int b = 0; b < io->colliders.count; b++) {
         const unsigned bit = sm_gate_bit(b);
         if (!(reach & bit) || (bits & bit) || io->colliders.cols[b].def.mode != SM_COLLIDE_SEPARATE) continue;
-        const sm_collider *cb = &io->colliders.cols[b];
-        if (sm_collider_phi(cb, D, 0, x0, NULL) <= io->gap || sm_collider_phi(cb, D, 1, x1, NULL) <= io->gap)
-            bits |= bit;
+        if (gate_phi(io, g, b, x1) <= io->gap) bits |= bit;
     }
     return bits;
 }
@@ -90,7 +115,8 @@ static void open_stencil(const sm_contact_gate_io *io, const sm_step_ctx *c, con
 void SM_FN(sm_contact_gate)(const sm_contact_gate_io *io, const sm_step_ctx *c) {
     const sm_bins *bins = io->bins;
     const long nb = (long)io->grid->nactive, npb = (long)bins->npb;
-    (void)nb;
+    gate_cols g;
+    gate_cols_init(io, c, &g);
 #pragma omp parallel num_threads(c->threads)
     {
 #pragma omp for schedule(static)
@@ -102,7 +128,7 @@ void SM_FN(sm_contact_gate)(const sm_contact_gate_io *io, const sm_step_ctx *c) 
             if (!reach) continue;
             for (uint32_t i = pb->start; i < pb->end; i++) {
                 const size_t q = bins->perm[i];
-                const unsigned bits = particle_bits(io, c, q, reach);
+                const unsigned bits = particle_bits(io, c, &g, q, reach);
                 if (bits) open_stencil(io, c, pb, q, bits);
             }
         }

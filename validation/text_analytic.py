@@ -232,7 +232,10 @@ in the first 0.1 s, 7,240 against 2,359 in the sixth, so friction acts on fewer 
 Not the flicker alone: a scratch gate with hysteresis (a per-particle state, opened at 0.35 dx and
 closed only beyond 0.6 or 0.9 dx; first version, dx 0.01, elastic step) slid 24.6 cm (0.54 m/s at
 1.2 s) and 12.2 cm (0.18 m/s). What keeps this block going is the ringing on a grid-aligned plane
-described above ("why the aligned block keeps sliding"), with or without the gate. The incline
+described above ("why the aligned block keeps sliding"), with or without the gate: with PIC, which
+damps it (the program's rule, TRANSFER 1, dx 0.01, elastic step), the block without the gate slid
+2.4 cm and still moved at 0.010 m/s at 1.2 s while its centre of mass climbed 2.6 mm, and with the
+gate it slid 0.45 cm and stopped, climbing 0.4 mm; at dx 0.02 both held. The incline
 table's block (another position in the grid, so other jitter) held at 2e-5 s with the patch's rule (below 5e-6 m/s at 1.2 s, by hand). The gate can become the
 default once that ringing is cured.
 

@@ -5,8 +5,9 @@
  *
  * Build (from a build directory of the program, made on the commit that added contact_gap):
  *   mpicc -O2 -I ../include -I ../tests -I include ../docs/experiments/resting_block_gate.c libsandmpm.a -lm -fopenmp -o rb
- * (plain gcc without MPI builds). Run: ./rb GAP MAX_DT DX METHOD, GAP in cells (0: no gate), METHOD 0 jittered,
- * 1 Poisson seeding; e.g. ./rb 0.35 1e-3 0.01 0 (the elastic time step binds below max_dt 1e-3). */
+ * (plain gcc without MPI builds). Run: ./rb GAP MAX_DT DX METHOD [TRANSFER], GAP in cells (0: no gate),
+ * METHOD 0 jittered, 1 Poisson seeding, TRANSFER 0 APIC (default), 1 PIC, 2 FLIP; e.g. ./rb 0.35 1e-3 0.01 0
+ * (the elastic time step binds below max_dt 1e-3). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,7 +16,7 @@
 
 int main(int argc, char **argv) {
     if (argc < 5) {
-        fprintf(stderr, "usage: rb GAP MAX_DT DX METHOD\n");
+        fprintf(stderr, "usage: rb GAP MAX_DT DX METHOD [TRANSFER]\n");
         return 2;
     }
     const double gap = atof(argv[1]), maxdt = atof(argv[2]), dx = atof(argv[3]);
@@ -26,6 +27,7 @@ int main(int argc, char **argv) {
     def.dx = dx;
     def.contact_gap = gap > 0 ? gap : INFINITY;
     def.max_dt = maxdt;
+    if (argc > 5) def.transfer = (sm_transfer)atoi(argv[5]);
     def.gravity[0] = -9.81 * sin(th);
     def.gravity[1] = -9.81 * cos(th);
     sm_world *w;

@@ -14,26 +14,23 @@
  * a dot product with the coefficients taken once per step (to rounding the same value). */
 #include "core/dim.h"
 
-#include <math.h>
 #include <string.h>
 
 #include "collide/grid_collide.h"
-#include "transfer/kernel.h"
+#include "transfer/stencil_dim.h"
 
 /* The separating colliders of a step: whether each is a single half-space, and then phi(x) =
  * phi0 + grad . (x - origin) at pose 1. Colliders from GATE_CAP on are evaluated in full. */
 enum { GATE_CAP = 32 };
 typedef struct gate_cols {
-    int count;
     double origin[3];
     int linear[GATE_CAP];
     double phi0[GATE_CAP], grad[GATE_CAP][3];
 } gate_cols;
 
 static void gate_cols_init(const sm_contact_gate_io *io, const sm_step_ctx *c, gate_cols *g) {
-    g->count = io->colliders.count;
     for (int a = 0; a < 3; a++) g->origin[a] = a < D ? c->pos_lo[a] : 0;
-    for (int b = 0; b < g->count && b < GATE_CAP; b++) {
+    for (int b = 0; b < io->colliders.count && b < GATE_CAP; b++) {
         const sm_collider *cb = &io->colliders.cols[b];
         g->linear[b] = cb->def.shape_count == 1 && cb->def.shapes[0].kind == SM_SHAPE_HALFSPACE && !cb->animated;
         g->phi0[b] = sm_collider_phi(cb, D, 1, g->origin, g->grad[b]);
@@ -89,26 +86,22 @@ static inline void open_node(uint8_t *gate, size_t ni, unsigned bits) {
     if ((have & bits) != bits) __atomic_fetch_or(&gate[ni], (uint8_t)bits, __ATOMIC_RELAXED);
 }
 
-/* Opens `bits` at every node of particle q's stencil (q in particle block pb). */
+/* Opens `bits` at every node of particle q's stencil (q in particle block pb): the nodes P2G gives
+ * its mass to (stencil_node). */
 static void open_stencil(const sm_contact_gate_io *io, const sm_step_ctx *c, const sm_pblock *pb, size_t q,
                          unsigned bits) {
     const int S = c->stencil;
-    int bc[3], lb[3] = {0, 0, 0};
-    sm_block_coords(pb->key, bc);
+    int bc[3];
+    pblock_origin(pb, bc);
+    weights W; /* only the stencil's first node per axis is used */
     for (int a = 0; a < D; a++)
-        lb[a] = sm_kernel_base(S, (io->x[q * D + a] - c->pos_lo[a]) * c->pos_inv_dx) - (bc[a] << SM_BLOCK_BITS);
+        W.lb[a] = sm_kernel_base(S, (io->x[q * D + a] - c->pos_lo[a]) * c->pos_inv_dx) - (bc[a] << SM_BLOCK_BITS);
     const int S2 = D == 3 ? S : 1;
     for (int s0 = 0; s0 < S; s0++)
         for (int s1 = 0; s1 < S; s1++)
             for (int s2 = 0; s2 < S2; s2++) {
                 const int s[3] = {s0, s1, s2};
-                unsigned cb = 0, local = 0;
-                for (int a = 0; a < D; a++) {
-                    const int node = lb[a] + s[a];
-                    cb = (cb << 1) | (unsigned)(node >> SM_BLOCK_BITS);
-                    local = (local << SM_BLOCK_BITS) | (unsigned)(node & SM_BLOCK_MASK);
-                }
-                if (pb->gslot[cb] != SM_NO_SLOT) open_node(io->gate, (size_t)pb->gslot[cb] * BN + local, bits);
+                open_node(io->gate, stencil_node(pb, &W, s), bits);
             }
 }
 

@@ -1192,6 +1192,56 @@ static void test_phi_box(void) {
     CHECK(worst_gap < 1e-12);
 }
 
+/* A collider of one half-space with the identity shape rotation takes a short path in
+ * sm_collider_phi (c.halfspace; src/collide/collide.c). It must give the general path's bits: the
+ * same half-space listed twice (two shapes, the first minimiser wins) takes the general path.
+ * Random normals, centres, poses (rotated, moving over a step), either inside_out, 2D and 3D, both
+ * poses, points near and far, and a NaN point. */
+static void test_halfspace_short_path(void) {
+    unsigned long long seed = 2026;
+    int compared = 0;
+    for (int trial = 0; trial < 64; trial++) {
+        const int dim = 2 + trial % 2;
+        sm_collider_def one = sm_collider_def_default();
+        sm_shape s = sm_shape_default(SM_SHAPE_HALFSPACE);
+        for (int a = 0; a < 3; a++) {
+            s.center[a] = sm_test_uniform(&seed, -2, 2);
+            s.normal[a] = sm_test_uniform(&seed, -1, 1);
+            one.pose.position[a] = sm_test_uniform(&seed, -1, 1);
+            one.velocity[a] = sm_test_uniform(&seed, -3, 3);
+            one.angular_velocity[a] = dim == 3 || a == 2 ? sm_test_uniform(&seed, -2, 2) : 0.0;
+        }
+        if (trial % 4 == 0) s.normal[0] = s.normal[2] = 0.0; /* an axis plane, as a ground */
+        s.inside_out = (trial / 2) % 2;
+        one.inside_out = (trial / 4) % 2;
+        if (trial % 3) quat_axis_angle(dim == 3 ? 0.3 : 0.0, dim == 3 ? -0.5 : 0.0, 1.0, 0.1 * trial, one.pose.rotation);
+        one.shape_count = 1;
+        one.shapes[0] = s;
+        sm_collider_def two = one;
+        two.shape_count = 2;
+        two.shapes[1] = s;
+        sm_collider cs, cg;
+        sm_collider_init(&cs, &one);
+        sm_collider_init(&cg, &two);
+        CHECK(cs.halfspace == 1 && cg.halfspace == 0);
+        sm_collider_begin_step(&cs, 0.25, 0.01);
+        sm_collider_begin_step(&cg, 0.25, 0.01);
+        for (int k = 0; k < 200; k++) {
+            double x[3] = {0, 0, 0}, gs[3], gg[3];
+            const double span = k % 2 ? 100.0 : 3.0;
+            for (int a = 0; a < dim; a++) x[a] = sm_test_uniform(&seed, -span, span);
+            if (k == 199) x[1] = NAN;
+            for (int which = 0; which < 2; which++) {
+                const double ps = sm_collider_phi(&cs, dim, which, x, gs), pg = sm_collider_phi(&cg, dim, which, x, gg);
+                CHECK(memcmp(&ps, &pg, sizeof ps) == 0 && memcmp(gs, gg, sizeof gs) == 0);
+                CHECK(sm_collider_phi(&cs, dim, which, x, NULL) == ps || ps != ps);
+                compared++;
+            }
+        }
+    }
+    CHECK(compared == 64 * 200 * 2);
+}
+
 int main(void) {
     test_lipschitz();
     test_defaults();
@@ -1209,6 +1259,7 @@ int main(void) {
     test_friction();
     test_collide_among();
     test_phi_box();
+    test_halfspace_short_path();
     printf("gradients: worst |fd - grad| %.3g, worst ||grad| - 1| %.3g\n", worst_fd, worst_unit);
     return sm_test_summary("test_collide");
 }

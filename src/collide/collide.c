@@ -264,6 +264,12 @@ void sm_collider_init(sm_collider *c, const sm_collider_def *def) {
             c->lip = fmax(c->lip, sm_mesh_field_get_stats(def->shapes[s].mesh)->lipschitz);
             if (def->shapes[s].mesh->anim) c->animated = 1;
         }
+    const sm_shape *s0 = &def->shapes[0];
+    c->halfspace = def->shape_count == 1 && s0->kind == SM_SHAPE_HALFSPACE && quat_is_identity(s0->rotation);
+    for (int dim = 2; c->halfspace && dim <= 3; dim++) {
+        double nn = norm_n(s0->normal, dim);
+        for (int k = 0; k < dim; k++) c->hs_g[dim - 2][k] = s0->normal[k] / nn;
+    }
     c->t0 = 0.0;
     c->dt = 0.0;
     c->pose0 = def->pose;
@@ -336,8 +342,48 @@ void sm_collider_end_step(sm_collider *c) {
     c->t0 += c->dt;
 }
 
+/* sm_collider_phi for a collider of one half-space with the identity rotation (c->halfspace):
+ * the operations of the general path below (mat_t_vec, shape_distance_at, shape_local_sdf, the
+ * signs, mat_vec) in the same order, so the same bits, in scalars that stay in registers (through
+ * arrays, the vector load of the frame's point after its scalar stores stalled), with the normal's
+ * square root and divisions taken once (sm_collider_init). A ground plane is tested at every node
+ * near it, twice a step. */
+static double halfspace_phi(const sm_collider *c, int dim, int which, const double x[3], double grad[3]) {
+    const sm_pose *pose = which ? &c->pose1 : &c->pose0;
+    const double *R = which ? c->R1 : c->R0, *ctr = c->def.shapes[0].center, *n = c->hs_g[dim - 2];
+    const double d0 = x[0] - pose->position[0], d1 = x[1] - pose->position[1];
+    double phi = 0.0, g0 = n[0], g1 = n[1], g2 = dim == 3 ? n[2] : 0.0;
+    if (dim == 2) {
+        const double p0 = (R[0] * d0 + R[3] * d1) - ctr[0], p1 = (R[1] * d0 + R[4] * d1) - ctr[1];
+        phi += g0 * p0;
+        phi += g1 * p1;
+    } else {
+        const double d2 = x[2] - pose->position[2];
+        const double p0 = (R[0] * d0 + R[3] * d1 + R[6] * d2) - ctr[0];
+        const double p1 = (R[1] * d0 + R[4] * d1 + R[7] * d2) - ctr[1];
+        const double p2 = (R[2] * d0 + R[5] * d1 + R[8] * d2) - ctr[2];
+        phi += g0 * p0;
+        phi += g1 * p1;
+        phi += g2 * p2;
+    }
+    if (c->def.shapes[0].inside_out) phi = -phi, g0 = -g0, g1 = -g1, g2 = -g2;
+    if (!(phi < HUGE_VAL)) phi = HUGE_VAL, g0 = g1 = g2 = 0.0; /* as the general loop: a NaN is no minimiser */
+    if (c->def.inside_out) phi = -phi, g0 = -g0, g1 = -g1, g2 = -g2;
+    if (grad && dim == 2) {
+        grad[0] = R[0] * g0 + R[1] * g1;
+        grad[1] = R[3] * g0 + R[4] * g1;
+        grad[2] = 0.0;
+    } else if (grad) {
+        grad[0] = R[0] * g0 + R[1] * g1 + R[2] * g2;
+        grad[1] = R[3] * g0 + R[4] * g1 + R[5] * g2;
+        grad[2] = R[6] * g0 + R[7] * g1 + R[8] * g2;
+    }
+    return phi;
+}
+
 double sm_collider_phi(const sm_collider *c, int dim, int which, const double x[3], double grad[3]) {
     SM_ASSERT(dim == 2 || dim == 3);
+    if (c->halfspace) return halfspace_phi(c, dim, which, x, grad);
     const sm_pose *pose = which ? &c->pose1 : &c->pose0;
     const double *R = which ? c->R1 : c->R0;
     double d[3] = {x[0] - pose->position[0], x[1] - pose->position[1],

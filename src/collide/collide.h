@@ -25,6 +25,10 @@ typedef struct sm_collider {
                               stats.lipschitz of its mesh shapes otherwise (for the culling bounds) */
     int animated;          /* 1: a shape is an animated mesh: phi depends on time (t0, t0 + dt) and
                               the velocity adds the mesh's deformation velocity (mesh_anim.c) */
+    int halfspace;         /* 1: one half-space shape with the identity rotation (a ground, a wall):
+                              sm_collider_phi takes its short path */
+    double hs_g[2][3];     /* that shape's unit normal in 2D ([0]: x, y) and 3D ([1]), normal / |normal|
+                              over the dimension's components, as the general path forms it */
 } sm_collider;
 
 /* Copies the definition, sets pose0 = pose1 = def->pose (or motion(user, 0) if a motion function

@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "collide/grid_collide.h"
+#include "core/threads.h"
 #include "transfer/stencil_dim.h"
 
 /* The separating colliders of a step: whether each is a single half-space, and then phi(x) =
@@ -110,11 +111,10 @@ void SM_FN(sm_contact_gate)(const sm_contact_gate_io *io, const sm_step_ctx *c) 
     const long nb = (long)io->grid->nactive, npb = (long)bins->npb;
     gate_cols g;
     gate_cols_init(io, c, &g);
-#pragma omp parallel num_threads(c->threads)
-    {
-#pragma omp for schedule(static)
+    SM_PARALLEL(c->threads, , {
+        SM_PRAGMA_(omp for schedule(static))
         for (long s = 0; s < nb; s++) memset(io->gate + (size_t)s * BN, 0, BN);
-#pragma omp for schedule(dynamic, 16)
+        SM_PRAGMA_(omp for schedule(dynamic, 16))
         for (long k = 0; k < npb; k++) {
             const sm_pblock *pb = &bins->pb[k];
             const unsigned reach = block_reach(io, c, pb);
@@ -125,5 +125,5 @@ void SM_FN(sm_contact_gate)(const sm_contact_gate_io *io, const sm_step_ctx *c) 
                 if (bits) open_stencil(io, c, pb, q, bits);
             }
         }
-    }
+    });
 }

@@ -6,6 +6,7 @@
 #include "core/dim.h"
 
 #include "collide/grid_collide.h"
+#include "core/threads.h"
 
 /* Position of grid node ni, m. */
 static inline void node_position(const sm_grid *g, const sm_step_ctx *c, size_t ni, double xi[3]) {
@@ -104,8 +105,7 @@ void SM_FN(sm_grid_collide_block)(const sm_grid_colliders *gc, const sm_grid *g,
 void SM_FN(sm_grid_collide_vector)(const sm_grid_colliders *gc, const sm_grid *g, const sm_step_ctx *c,
                                    const sm_real *mass, size_t nodes, sm_real *z, sm_node_contact *rec) {
     const long nl = (long)nodes;
-#pragma omp parallel for schedule(static) num_threads(c->threads)
-    for (long l = 0; l < nl; l++) {
+    SM_PARALLEL_FOR(c->threads, schedule(static), long l = 0; l < nl; l++, {
         sm_node_contact *r = &rec[l];
         r->sticky = -1;
         r->count = 0;
@@ -115,7 +115,7 @@ void SM_FN(sm_grid_collide_vector)(const sm_grid_colliders *gc, const sm_grid *g
         for (int a = 0; a < D; a++) v[a] = (double)z[l * D + a];
         (void)sm_collide_node_among(gc->cols, NULL, gc->count, D, xi, c->dt, INFINITY, node_gate(gc, (size_t)l), v, r);
         for (int a = 0; a < D; a++) z[l * D + a] = (sm_real)v[a];
-    }
+    });
 }
 
 void SM_FN(sm_grid_friction_after_solve)(const sm_grid_colliders *gc, const sm_grid *g, const sm_step_ctx *c,
@@ -123,8 +123,7 @@ void SM_FN(sm_grid_friction_after_solve)(const sm_grid_colliders *gc, const sm_g
                                          const sm_real *solution, const sm_real *vstar, const sm_real *vcollided,
                                          sm_real *vbar, sm_real *vtilde) {
     const long nl = (long)nodes;
-#pragma omp parallel for schedule(static) num_threads(c->threads)
-    for (long l = 0; l < nl; l++) {
+    SM_PARALLEL_FOR(c->threads, schedule(static), long l = 0; l < nl; l++, {
         double v[3] = {0, 0, 0}, dv[3] = {0, 0, 0}, xi[3] = {0, 0, 0};
         for (int a = 0; a < D; a++) {
             v[a] = (double)solution[l * D + a];
@@ -132,5 +131,5 @@ void SM_FN(sm_grid_friction_after_solve)(const sm_grid_colliders *gc, const sm_g
         }
         if (rec[l].count > 0) node_position(g, c, (size_t)l, xi); /* (massless nodes have no contacts) */
         node_friction(gc, xi, &rec[l], dv, v, vbar + l * D, vtilde + l * D);
-    }
+    });
 }

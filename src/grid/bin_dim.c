@@ -31,6 +31,7 @@
 
 #include <string.h>
 
+#include "core/threads.h"
 #include "grid/bin.h"
 #include "transfer/kernel.h"
 
@@ -79,8 +80,7 @@ static sm_status count_known_blocks(sm_bins *b, const double *x, size_t n, const
     const sm_block_hash *ph = &b->pb_hash;
     memset(cnt, 0, (size_t)T * nb * sizeof(uint32_t));
     long misses = 0;
-#pragma omp parallel for schedule(static, 1) reduction(+ : misses) num_threads(T)
-    for (int t = 0; t < T; t++) {
+    SM_PARALLEL_FOR(T, schedule(static, 1) reduction(+ : misses), int t = 0; t < T; t++, {
         size_t p0, p1;
         thread_share(n, T, t, &p0, &p1);
         uint32_t *ct = cnt + (size_t)t * nb;
@@ -95,7 +95,7 @@ static sm_status count_known_blocks(sm_bins *b, const double *x, size_t n, const
             if (slot == SM_NO_SLOT) misses++;
             else ct[slot]++;
         }
-    }
+    });
     *misses_out = misses;
     return SM_OK;
 }
@@ -158,8 +158,7 @@ static void scatter_particles(sm_bins *b, const double *x, size_t n, const sm_st
     const int S = c->stencil;
     const sm_block_hash *ph = &b->pb_hash;
     uint32_t *cnt = b->counts, *perm = b->perm;
-#pragma omp parallel for schedule(static, 1) num_threads(T)
-    for (int t = 0; t < T; t++) {
+    SM_PARALLEL_FOR(T, schedule(static, 1), int t = 0; t < T; t++, {
         size_t p0, p1;
         thread_share(n, T, t, &p0, &p1);
         uint32_t *ct = cnt + (size_t)t * nb;
@@ -173,7 +172,7 @@ static void scatter_particles(sm_bins *b, const double *x, size_t n, const sm_st
             }
             perm[ct[slot]++] = (uint32_t)p;
         }
-    }
+    });
 }
 
 /* 3c. The new block list (ascending key, with its range in perm) and its hash. After the
@@ -222,11 +221,10 @@ static uint32_t sort_by_id(uint32_t *perm, const uint32_t *id, uint32_t s, uint3
 static void order_by_id(sm_bins *b, const uint32_t *id, int T) {
     uint32_t *perm = b->perm;
     const long nb = (long)b->npb;
-#pragma omp parallel for schedule(static) num_threads(T)
-    for (long r = 0; r < nb; r++) {
+    SM_PARALLEL_FOR(T, schedule(static), long r = 0; r < nb; r++, {
         const uint32_t moved = sort_by_id(perm, id, b->pb[r].start, b->pb[r].end);
         b->pb[r].ascending = !moved; /* the scatter's order increases; any move breaks it */
-    }
+    });
 }
 
 /* Key of grid block cb (0 .. 2^d - 1) of particle block bc; 0 in *inside if outside the domain. */
@@ -348,12 +346,11 @@ static int bins_still_hold(sm_bins *b, const sm_particles *P, const sm_grid *g, 
     if (!b->basis.valid || !same_basis(&now, &b->basis)) return 0;
     if (b->npb == 0 || b->pb[0].start != 0 || b->pb[b->npb - 1].end != P->n) return 0;
     int held = 1;
-#pragma omp parallel for schedule(static, 1) reduction(& : held) num_threads(T)
-    for (int t = 0; t < T; t++) {
+    SM_PARALLEL_FOR(T, schedule(static, 1) reduction(& : held), int t = 0; t < T; t++, {
         size_t r0, r1;
         thread_share(b->npb, T, t, &r0, &r1);
         held &= blocks_hold(b, P, c, r0, r1);
-    }
+    });
     return held;
 }
 
@@ -441,15 +438,14 @@ static void scatter_more(sm_bins *b, const sm_particles *P, size_t first, const 
     uint32_t *perm = b->perm;
     const uint32_t *id = P->id;
     const long nt = (long)touched;
-#pragma omp parallel for schedule(static) num_threads(T)
-    for (long t = 0; t < nt; t++) {
+    SM_PARALLEL_FOR(T, schedule(static), long t = 0; t < nt; t++, {
         sm_pblock *pb = &b->pb[b->counts[t] & ~(1u << 31)];
         const uint32_t s = pb->start, e = pb->end;
         sort_by_id(perm, id, s, e);
         uint32_t increasing = 1; /* (the old particles may have been moved by the first binning's sort) */
         for (uint32_t i = s + 1; i < e; i++) increasing &= perm[i] > perm[i - 1];
         pb->ascending = increasing;
-    }
+    });
 }
 
 /* The grid blocks that the blocks new to the binning touch and that are not live yet: merged into

@@ -1,6 +1,7 @@
 /* Sparse block grid storage; see grid.h. */
 #include <string.h>
 
+#include "core/threads.h"
 #include "grid/grid.h"
 
 sm_status sm_block_hash_reserve(sm_block_hash *h, size_t n) {
@@ -82,13 +83,12 @@ void sm_grid_zero(sm_grid *g, int threads) {
     long nb = (long)g->nactive;
     const sm_grid_p2g a = sm_grid_p2g_arrays(g);
     (void)threads;
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (long t = 0; t < nb; t++) {
+    SM_PARALLEL_FOR(threads, schedule(static), long t = 0; t < nb; t++, {
         size_t b = (size_t)t;
         memset(a.mass + b * bn, 0, bn * sizeof(sm_real));
         memset(a.momentum + b * bn * d, 0, bn * d * sizeof(sm_real));
         memset(a.force + b * bn * d, 0, bn * d * sizeof(sm_real));
-    }
+    });
 }
 
 /* The P2G arrays of g (mass, momentum, force) and their values per node. */

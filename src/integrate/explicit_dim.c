@@ -6,6 +6,7 @@
  * mass get zero velocities. Blocks are independent: a static split over the threads. */
 #include "core/dim.h"
 
+#include "core/threads.h"
 #include "integrate/explicit.h"
 
 void SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c) {
@@ -15,8 +16,7 @@ void SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c) {
     const sm_real dtr = (sm_real)c->dt;
     const sm_real *mass = io->in.mass, *momentum = io->in.momentum, *force = io->in.force;
     sm_real *vn_out = io->out.vn, *vbar = io->out.vbar, *vtilde = io->out.vtilde;
-#pragma omp parallel for schedule(static) num_threads(c->threads)
-    for (long t = 0; t < nb; t++) {
+    SM_PARALLEL_FOR(c->threads, schedule(static), long t = 0; t < nb; t++, {
         const size_t b = (size_t)t;
         /* v^n, v* (into v-bar and v-tilde: their values where no collider acts) and the largest |v*|. */
         double vmax2 = 0;
@@ -35,5 +35,5 @@ void SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c) {
             if ((double)s2 > vmax2) vmax2 = (double)s2;
         }
         SM_FN(sm_grid_collide_block)(&io->colliders, g, c, b, vmax2, mass, vbar, vtilde);
-    }
+    });
 }

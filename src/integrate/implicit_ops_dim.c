@@ -20,13 +20,13 @@
 
 #include <string.h>
 
+#include "core/threads.h"
 #include "integrate/implicit_solver.h"
 
 double SM_FN(sm_imp_dot)(const sm_implicit_sys *s, const sm_real *a, const sm_real *b) {
     const sm_implicit_ws *ws = s->ws;
     const long nb = (long)s->grid->nactive;
-#pragma omp parallel for schedule(static) num_threads(s->c->threads)
-    for (long t = 0; t < nb; t++) {
+    SM_PARALLEL_FOR(s->c->threads, schedule(static), long t = 0; t < nb; t++, {
         double sum = 0;
         for (size_t l = (size_t)t * BN; l < (size_t)(t + 1) * BN; l++) {
             double m = (double)ws->mass[l];
@@ -34,7 +34,7 @@ double SM_FN(sm_imp_dot)(const sm_implicit_sys *s, const sm_real *a, const sm_re
             for (int k = 0; k < D; k++) sum += m * (double)a[l * D + k] * (double)b[l * D + k];
         }
         ws->partial[t] = sum;
-    }
+    });
     return SM_FN(sm_imp_block_sum)(s);
 }
 
@@ -76,8 +76,7 @@ void SM_FN(sm_imp_project)(const sm_implicit_sys *s, sm_real *y, int prune) {
     sm_implicit_ws *ws = s->ws;
     const sm_collider *cols = s->colliders.cols;
     const long nl = (long)s->nodes;
-#pragma omp parallel for schedule(static) num_threads(s->c->threads)
-    for (long l = 0; l < nl; l++) {
+    SM_PARALLEL_FOR(s->c->threads, schedule(static), long l = 0; l < nl; l++, {
         sm_node_contact *rec = &ws->contact[l];
         sm_real *v = y + l * D;
         if (!(ws->mass[l] > 0) || rec->sticky >= 0) {
@@ -96,7 +95,7 @@ void SM_FN(sm_imp_project)(const sm_implicit_sys *s, sm_real *y, int prune) {
             }
             for (int a = 0; a < D; a++) v[a] = (sm_real)((double)v[a] - vn * nrm[a]);
         }
-    }
+    });
 }
 
 void SM_FN(sm_imp_residual)(const sm_implicit_sys *s, const sm_real *z, sm_real *y) {
@@ -130,8 +129,7 @@ double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z) {
     double g2 = 0;
     for (int a = 0; a < D; a++) g2 += (double)s->c->gravity[a] * (double)s->c->gravity[a];
     const double dt = s->c->dt, dtg2 = dt * dt * g2;
-#pragma omp parallel for schedule(static) num_threads(s->c->threads)
-    for (long t = 0; t < nb; t++) {
+    SM_PARALLEL_FOR(s->c->threads, schedule(static), long t = 0; t < nb; t++, {
         double sum = 0;
         for (size_t l = (size_t)t * BN; l < (size_t)(t + 1) * BN; l++) {
             const double m = (double)ws->mass[l];
@@ -144,7 +142,7 @@ double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z) {
             sum += m * q;
         }
         ws->partial[t] = sum;
-    }
+    });
     return SM_FN(sm_imp_block_sum)(s);
 }
 

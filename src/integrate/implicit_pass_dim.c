@@ -187,8 +187,7 @@ typedef void (*block_fn)(const sm_implicit_sys *s, const sm_pblock *pb, int th, 
  * threads in contiguous ranges of equal particle counts (sm_bins_range). */
 static void sweep_by_colour(const sm_implicit_sys *s, block_fn fn, void *arg) {
     const sm_bins *bins = s->bins;
-#pragma omp parallel num_threads(s->c->threads)
-    {
+    SM_PARALLEL(s->c->threads, , {
         int th, nt;
         sm_thread_team(&th, &nt);
         for (int col = 0; col < NCOLORS; col++) {
@@ -200,9 +199,9 @@ static void sweep_by_colour(const sm_implicit_sys *s, block_fn fn, void *arg) {
                 const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
                 if (pblock_needed(s, pb)) fn(s, pb, th, arg);
             }
-#pragma omp barrier
+            SM_PRAGMA_(omp barrier);
         }
-    }
+    });
 }
 
 typedef struct {

@@ -18,6 +18,7 @@
 
 #include <string.h>
 
+#include "core/threads.h"
 #include "integrate/implicit_solver.h"
 #include "transfer/stencil_dim.h"
 
@@ -121,8 +122,7 @@ void SM_FN(sm_imp_precond_build)(const sm_implicit_sys *s) {
     SM_FN(sm_imp_scatter_by_colour)(s, scatter_particle_blocks, NULL, ws->pinv);
     const double dt2 = s->c->dt * s->c->dt;
     const long nl = (long)s->nodes;
-#pragma omp parallel for schedule(static) num_threads(s->c->threads)
-    for (long l = 0; l < nl; l++) {
+    SM_PARALLEL_FOR(s->c->threads, schedule(static), long l = 0; l < nl; l++, {
         sm_real *blk = ws->pinv + l * DD;
         const double m = (double)ws->mass[l];
         double S[DD], inv[DD], trace = 0;
@@ -137,20 +137,19 @@ void SM_FN(sm_imp_precond_build)(const sm_implicit_sys *s) {
             for (int k = 0; k < DD; k++) inv[k] = k % (D + 1) == 0 ? sc : 0.0;
         }
         for (int k = 0; k < DD; k++) blk[k] = m > 0 ? (sm_real)inv[k] : 0;
-    }
+    });
 }
 
 void SM_FN(sm_imp_precond_apply)(const sm_implicit_sys *s, const sm_real *x, sm_real *out) {
     const sm_implicit_ws *ws = s->ws;
     const long nl = (long)s->nodes;
-#pragma omp parallel for schedule(static) num_threads(s->c->threads)
-    for (long l = 0; l < nl; l++) {
+    SM_PARALLEL_FOR(s->c->threads, schedule(static), long l = 0; l < nl; l++, {
         const sm_real *inv = ws->pinv + l * DD;
         for (int b = 0; b < D; b++) {
             double acc = 0;
             for (int a = 0; a < D; a++) acc += (double)inv[b * D + a] * (double)x[l * D + a];
             out[l * D + b] = (sm_real)acc;
         }
-    }
+    });
     SM_FN(sm_imp_project)(s, out, 0); /* keep the step in P's range: J does not see the rest, collisions would */
 }

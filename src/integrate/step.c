@@ -21,6 +21,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "core/threads.h"
 #include "core/timer.h"
 #include "integrate/health.h"
 #include "world/world.h"
@@ -432,12 +433,11 @@ static double max_particle_speed(const sm_world *w) {
     const long n = (long)w->p.n;
     const sm_real *v = w->p.v;
     double m2 = 0;
-#pragma omp parallel for schedule(static) reduction(max : m2) num_threads(w->threads)
-    for (long p = 0; p < n; p++) {
+    SM_PARALLEL_FOR(w->threads, schedule(static) reduction(max : m2), long p = 0; p < n; p++, {
         double s = 0;
         for (int a = 0; a < d; a++) s += (double)v[p * d + a] * (double)v[p * d + a];
         if (s > m2) m2 = s;
-    }
+    });
     return sqrt(m2);
 }
 

@@ -9,7 +9,14 @@
 #include "core/dim.h"
 
 #include "core/fpmode.h"
+#include "core/threads.h"
 #include "material/plasticity.h"
+
+#if D == 2
+#define PLASTIC_LANES sm_plastic_lanes2
+#else
+#define PLASTIC_LANES sm_plastic_lanes3
+#endif
 
 int SM_FN(sm_plasticity)(const sm_plasticity_io *io) {
     const size_t n = io->n, first = io->first;
@@ -17,14 +24,13 @@ int SM_FN(sm_plasticity)(const sm_plasticity_io *io) {
     enum { L = SM_PLASTIC_LANES };
     const long nbatch = (long)((n - first + L - 1) / L);
     int bad = 0;
-#pragma omp parallel num_threads(io->threads) reduction(| : bad)
-    {
+    SM_PARALLEL(io->threads, reduction(| : bad), {
         sm_plastic_lanes b;
         int lane_mat[L]; /* material whose parameters lane l holds (-1: padding) */
         for (int l = 0; l < L; l++) lane_mat[l] = -2;
         sm_real z = 0; /* 0 * every output: NaN iff one is not finite */
         const sm_fpmode fp = sm_fpmode_flush_subnormals(); /* core/fpmode.h */
-#pragma omp for schedule(static)
+        SM_PRAGMA_(omp for schedule(static))
         for (long t = 0; t < nbatch; t++) {
             const size_t p0 = first + (size_t)t * L;
             const int cnt = (int)(n - p0 < (size_t)L ? n - p0 : (size_t)L);
@@ -38,11 +44,7 @@ int SM_FN(sm_plasticity)(const sm_plasticity_io *io) {
                 if (mi >= 0) sm_plastic_lanes_load(&b, D, l, io->F + p * DD, io->alpha[p], io->q[p]);
                 else sm_plastic_lanes_load(&b, D, l, NULL, 0, 0);
             }
-#if D == 2
-            sm_plastic_lanes2(&b);
-#else
-            sm_plastic_lanes3(&b);
-#endif
+            PLASTIC_LANES(&b);
             for (int l = 0; l < cnt; l++) {
                 const size_t p = p0 + (size_t)l;
                 z += sm_plastic_lanes_store(&b, D, l, io->F + p * DD, io->alpha + p, io->q + p,
@@ -51,6 +53,6 @@ int SM_FN(sm_plasticity)(const sm_plasticity_io *io) {
         }
         sm_fpmode_restore(fp);
         bad |= (z != 0 || z != z);
-    }
+    });
     return bad;
 }

@@ -140,8 +140,7 @@ void SM_FN(sm_p2g)(const sm_p2g_io *io, const sm_step_ctx *c) {
     const uint32_t *list = io->lists ? io->lists->blocks : bins->color_blocks;
     const uint32_t *offset = io->lists ? io->lists->offset : bins->color_offset;
     vec *caches = (vec *)io->cache;
-#pragma omp parallel num_threads(c->threads)
-    {
+    SM_PARALLEL(c->threads, , {
         int t, T;
         sm_thread_team(&t, &T);
         vec *cache = caches + (size_t)t * NCACHE;
@@ -153,7 +152,7 @@ void SM_FN(sm_p2g)(const sm_p2g_io *io, const sm_step_ctx *c) {
                 for (long k = lo; k < hi; k++) p2g_block(io, c, 3, list[k], cache);
             else
                 for (long k = lo; k < hi; k++) p2g_block(io, c, 4, list[k], cache);
-#pragma omp barrier
+            SM_PRAGMA_(omp barrier);
         }
-    }
+    });
 }

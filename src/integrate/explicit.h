@@ -13,8 +13,10 @@ typedef struct sm_grid_update_io {
     sm_grid_colliders colliders;
 } sm_grid_update_io;
 
+/* Returns 1 if every v-bar and v-tilde it wrote is finite (then the grid's health check need not
+ * scan them), 0 if one may not be. */
 #ifdef SM_DIM
-void SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c);
+int SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c);
 #endif
 
 #endif

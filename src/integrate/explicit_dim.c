@@ -3,20 +3,30 @@
  *   v^n_i = (mv)_i / m_i,   v*_i = v^n_i + dt (f_i / m_i + g)        (3.92)
  * then, per node with mass, GRID_COLLISIONS and FRICTION (collide/grid_collide.h) give v-bar and
  * v-tilde; where no collider can reach a block this step, v-bar = v-tilde = v*. Nodes without
- * mass get zero velocities. Blocks are independent: a static split over the threads. */
+ * mass get zero velocities. Blocks are independent: a static split over the threads. Each block's
+ * velocities are then tested for a non-finite value (the grid's health check, health.h). */
 #include "core/dim.h"
 
 #include "core/threads.h"
 #include "integrate/explicit.h"
 
-void SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c) {
+/* 0 * every velocity of block b, summed: NaN iff one is not finite (the grid's health check,
+ * folded into the pass that wrote them while they are in cache). */
+static sm_real block_nonfinite(const sm_real *vbar, const sm_real *vtilde, size_t b, size_t bn) {
+    sm_real z = 0;
+    for (size_t k = b * bn * D; k < (b + 1) * bn * D; k++) z += 0 * vbar[k] + 0 * vtilde[k];
+    return z;
+}
+
+int SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c) {
     const sm_grid *g = io->grid;
     const long nb = (long)g->nactive;
     const size_t bn = (size_t)g->block_nodes;
     const sm_real dtr = (sm_real)c->dt;
     const sm_real *mass = io->in.mass, *momentum = io->in.momentum, *force = io->in.force;
     sm_real *vn_out = io->out.vn, *vbar = io->out.vbar, *vtilde = io->out.vtilde;
-    SM_PARALLEL_FOR(c->threads, schedule(static), long t = 0; t < nb; t++, {
+    int bad = 0;
+    SM_PARALLEL_FOR(c->threads, schedule(static) reduction(| : bad), long t = 0; t < nb; t++, {
         const size_t b = (size_t)t;
         /* v^n, v* (into v-bar and v-tilde: their values where no collider acts) and the largest |v*|. */
         double vmax2 = 0;
@@ -35,5 +45,8 @@ void SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c) {
             if ((double)s2 > vmax2) vmax2 = (double)s2;
         }
         SM_FN(sm_grid_collide_block)(&io->colliders, g, c, b, vmax2, mass, vbar, vtilde);
+        const sm_real z = block_nonfinite(vbar, vtilde, b, bn);
+        bad |= z != 0 || z != z;
     });
+    return !bad;
 }

@@ -84,6 +84,7 @@ static long first_bad_node(const sm_world *w) {
 }
 
 sm_status sm_health_check_grid(sm_world *w, double dt) {
+    if (w->grid_finite) return SM_OK; /* the grid update tested every velocity it wrote */
     const long bad = first_bad_node(w);
     if (bad < 0) return SM_OK;
     int ijk[3];

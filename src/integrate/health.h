@@ -15,7 +15,9 @@
  * checks cover them. *too_fast = 1 says the failure is the CFL bound alone: nothing was changed,
  * the step may be retried with a smaller dt. */
 sm_status sm_health_check_start(sm_world *w, double dt, int *too_fast);
-/* After the grid update: every node's v-bar and v-tilde finite; else names the nearest particle. */
+/* After the grid update: every node's v-bar and v-tilde finite; else names the nearest particle.
+ * Scans the grid only when the update did not test what it wrote (w->grid_finite: the implicit
+ * solve) or found a non-finite value. */
 sm_status sm_health_check_grid(sm_world *w, double dt);
 /* After plasticity: G2P and plasticity flagged no non-finite value (w->step_bad); names the first
  * bad particle. The particles are clean again (w->dirty = 0). */

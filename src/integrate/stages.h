@@ -23,7 +23,7 @@ typedef struct sm_stages {
     void (*contact_gate)(const sm_contact_gate_io *io, const sm_step_ctx *c);
     /* 4-5. Explicit: v* = v^n + dt (f/m + g), collisions (v-bar), friction (v-tilde)
      * (integrate/explicit.h). */
-    void (*grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c);
+    int (*grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c);
     /* 4-5. Implicit: Newton-GMRES for v-bar, then collisions and friction as above
      * (integrate/implicit_solver.h). */
     sm_status (*implicit_solve)(const sm_implicit_io *io, const sm_step_ctx *c);

@@ -220,9 +220,10 @@ static sm_status grid_velocities(sm_world *w, const sm_step_ctx *c) {
     if (gated != SM_OK) return gated;
     if (w->def.integrator != SM_INTEGRATOR_IMPLICIT) {
         const sm_grid_update_io io = grid_update_io(w);
-        w->stages->grid_update(&io, c);
+        w->grid_finite = w->stages->grid_update(&io, c);
         return SM_OK;
     }
+    w->grid_finite = 0;
     sm_implicit_io io = implicit_io(w);
     io.may_reject = c->dt > SM_IMPLICIT_REJECT_FRACTION * w->def.max_dt;
     if (w->dist) { /* the halo plan fails on every rank or none */

@@ -76,6 +76,8 @@ struct sm_world {
     sm_implicit_stats newton;
     double step_vmax2;      /* largest particle speed^2 after the last G2P */
     int step_bad;           /* the last step produced a non-finite particle value */
+    int grid_finite;        /* this step's explicit grid update found every v-bar and v-tilde finite
+                               (the grid check then need not scan them); 0: not known */
     int step_refused;       /* the last sm_world_step refused its dt, by the CFL check or an unconverged
                                implicit solve (world intact) */
     double dt_cap;          /* after such a refusal half the refused dt, which sm_world_next_dt

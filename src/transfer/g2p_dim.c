@@ -21,24 +21,25 @@
 #include "core/threads.h"
 #include "transfer/stencil_dim.h"
 
-/* Gathers the 2^d grid blocks of particle block pb into the cache (see the top of the file). */
+/* Gathers the nodes of particle block pb's 2^d grid blocks that its particles can reach
+ * (CACHE_REACH_BEGIN) into the cache (see the top of the file). */
 static void g2p_gather(const sm_g2p_io *io, const sm_step_ctx *c, const sm_pblock *pb, vec *restrict cache) {
-    const int flip = (c->transfer == SM_TRANSFER_FLIP);
+    const int flip = (c->transfer == SM_TRANSFER_FLIP), S = c->stencil;
     const sm_real r = c->flip_ratio;
     for (int cb = 0; cb < NGB; cb++) {
         const uint32_t slot = pb->gslot[cb];
-        for (int l = 0; l < BN; l++) {
-            vec *q = &cache[cache_index(cb, l)];
-            vec val = {0};
-            if (slot != SM_NO_SLOT) {
-                const size_t ni = (size_t)slot * BN + (size_t)l;
-                for (int a = 0; a < D; a++) {
-                    val[a] = flip ? io->vtilde[ni * D + a] - r * io->vn[ni * D + a] : io->vtilde[ni * D + a];
-                    val[D + a] = io->vbar[ni * D + a];
-                }
+        CACHE_REACH_BEGIN(S, cb, l)
+        vec *q = &cache[cache_index(cb, l)];
+        vec val = {0};
+        if (slot != SM_NO_SLOT) {
+            const size_t ni = (size_t)slot * BN + (size_t)l;
+            for (int a = 0; a < D; a++) {
+                val[a] = flip ? io->vtilde[ni * D + a] - r * io->vn[ni * D + a] : io->vtilde[ni * D + a];
+                val[D + a] = io->vbar[ni * D + a];
             }
-            *q = val;
         }
+        *q = val;
+        CACHE_REACH_END
     }
 }
 

@@ -93,23 +93,32 @@ static inline __attribute__((always_inline)) void p2g_splat(int S, const wchunk 
 #endif
 }
 
-/* Adds the cache into the particle block's 2^d grid blocks (or, where its `side` bit says so,
- * into the side arrays): lane 0 mass, lanes 1..d momentum, lanes d+1..2d force. */
-static inline __attribute__((always_inline)) void p2g_flush(const sm_pblock *pb, const vec *restrict cache,
+/* Zeroes the cache's nodes that the block's particles can reach (CACHE_REACH_BEGIN). */
+static inline __attribute__((always_inline)) void p2g_clear(int S, vec *restrict cache) {
+    for (int cb = 0; cb < NGB; cb++) {
+        CACHE_REACH_BEGIN(S, cb, l)
+        cache[cache_index(cb, l)] = (vec){0};
+        CACHE_REACH_END
+    }
+}
+
+/* Adds the cache's reachable nodes into the particle block's 2^d grid blocks (or, where its `side`
+ * bit says so, into the side arrays): lane 0 mass, lanes 1..d momentum, lanes d+1..2d force. */
+static inline __attribute__((always_inline)) void p2g_flush(int S, const sm_pblock *pb, const vec *restrict cache,
                                                            const sm_grid_p2g *grid, const sm_grid_p2g *side) {
     for (int cb = 0; cb < NGB; cb++) {
         const uint32_t slot = pb->gslot[cb];
         if (slot == SM_NO_SLOT) continue;
         const sm_grid_p2g *g = (pb->side >> cb) & 1 ? side : grid;
-        for (int l = 0; l < BN; l++) {
-            const vec q = cache[cache_index(cb, l)];
-            const size_t ni = (size_t)slot * BN + (size_t)l;
-            g->mass[ni] += q[0];
-            for (int a = 0; a < D; a++) {
-                g->momentum[ni * D + a] += q[1 + a];
-                g->force[ni * D + a] += q[1 + D + a];
-            }
+        CACHE_REACH_BEGIN(S, cb, l)
+        const vec q = cache[cache_index(cb, l)];
+        const size_t ni = (size_t)slot * BN + (size_t)l;
+        g->mass[ni] += q[0];
+        for (int a = 0; a < D; a++) {
+            g->momentum[ni * D + a] += q[1 + a];
+            g->force[ni * D + a] += q[1 + D + a];
         }
+        CACHE_REACH_END
     }
 }
 
@@ -121,7 +130,7 @@ static inline __attribute__((always_inline)) void p2g_block(const sm_p2g_io *io,
     const sm_real dinv = (S == 3 ? SM_R(4.0) : SM_R(3.0)) * c->inv_dx * c->inv_dx;
     int bc[3];
     pblock_origin(pb, bc);
-    memset(cache, 0, NCACHE * sizeof(vec));
+    p2g_clear(S, cache);
     wchunk wc;
     for (uint32_t idx = pb->start; idx < pb->end; idx++) {
         const size_t p = bins->perm[idx];
@@ -131,7 +140,7 @@ static inline __attribute__((always_inline)) void p2g_block(const sm_p2g_io *io,
         p2g_terms(io, p, apic, dinv, &A, Ce, Ve);
         p2g_splat(S, &wc, j, A, Ce, Ve, cache);
     }
-    p2g_flush(pb, cache, &io->grid, &io->side);
+    p2g_flush(S, pb, cache, &io->grid, &io->side);
 }
 
 void SM_FN(sm_p2g)(const sm_p2g_io *io, const sm_step_ctx *c) {

@@ -180,6 +180,24 @@ static inline int cache_index(int cb, int l) {
 #endif
 }
 
+/* The block-local nodes l of grid block cb (cache_index) that a particle of the particle block can
+ * reach with a stencil of S nodes per axis: a particle's first node lies 0..3 nodes into the
+ * block (it is binned by it), so its nodes reach S + 2 nodes in: local coordinates 0..3 along an
+ * axis where cb is the particle block's own grid block, 0..S-2 where it is the next one. Only
+ * these need gathering (G2P), zeroing and adding into the grid (P2G): 6^d of the cache's 8^d
+ * nodes with the quadratic kernel. The others hold +0, whose addition changes no grid value. */
+#define CACHE_REACH_BEGIN(S, cb, l)                                                  \
+    {                                                                                \
+        int n_[3] = {1, 1, 1};                                                       \
+        for (int a_ = 0; a_ < D; a_++) n_[a_] = (((cb) >> (D - 1 - a_)) & 1) ? (S) - 1 : 4; \
+        for (int i_ = 0; i_ < n_[0]; i_++)                                           \
+            for (int j_ = 0; j_ < n_[1]; j_++)                                       \
+                for (int k_ = 0; k_ < n_[2]; k_++) {                                 \
+                    const int l = D == 2 ? i_ * 4 + j_ : (i_ * 4 + j_) * 4 + k_;
+#define CACHE_REACH_END \
+    }                   \
+    }
+
 /* First node (per axis) of a particle block. */
 static inline void pblock_origin(const sm_pblock *pb, int bc[3]) {
     sm_block_coords(pb->key, bc);

@@ -38,16 +38,26 @@ static inline int pblock_needed(const sm_implicit_sys *s, const sm_pblock *pb) {
     return 0;
 }
 
-/* z on the 2^d grid blocks of pb into the cache, lanes 0..d-1 (0 where a block is missing). */
-static void gather_block(const sm_pblock *pb, const sm_real *z, nvec *restrict cache) {
+/* z on the nodes of pb's 2^d grid blocks that its particles reach (CACHE_REACH_BEGIN) into the
+ * cache, lanes 0..d-1 (0 where a block is missing). */
+static void gather_block(int S, const sm_pblock *pb, const sm_real *z, nvec *restrict cache) {
     for (int cb = 0; cb < NGB; cb++) {
         const uint32_t slot = pb->gslot[cb];
-        for (int l = 0; l < BN; l++) {
-            nvec val = {0};
-            if (slot != SM_NO_SLOT)
-                for (int a = 0; a < D; a++) val[a] = z[((size_t)slot * BN + (size_t)l) * D + a];
-            cache[cache_index(cb, l)] = val;
-        }
+        CACHE_REACH_BEGIN(S, cb, l)
+        nvec val = {0};
+        if (slot != SM_NO_SLOT)
+            for (int a = 0; a < D; a++) val[a] = z[((size_t)slot * BN + (size_t)l) * D + a];
+        cache[cache_index(cb, l)] = val;
+        CACHE_REACH_END
+    }
+}
+
+/* Zeroes the cache's nodes that pb's particles reach. */
+static void clear_block(int S, nvec *restrict cache) {
+    for (int cb = 0; cb < NGB; cb++) {
+        CACHE_REACH_BEGIN(S, cb, l)
+        cache[cache_index(cb, l)] = (nvec){0};
+        CACHE_REACH_END
     }
 }
 
@@ -118,16 +128,17 @@ static inline __attribute__((always_inline)) void cache_scatter(int S, const wch
 #endif
 }
 
-/* The cache (lanes 0..d-1) added into out on the 2^d grid blocks of pb. */
-static void flush_block(const sm_pblock *pb, const nvec *restrict cache, sm_real *out) {
+/* The cache's reachable nodes (lanes 0..d-1) added into out on the 2^d grid blocks of pb (the
+ * others hold +0, which changes no sum). */
+static void flush_block(int S, const sm_pblock *pb, const nvec *restrict cache, sm_real *out) {
     for (int cb = 0; cb < NGB; cb++) {
         const uint32_t slot = pb->gslot[cb];
         if (slot == SM_NO_SLOT) continue;
-        for (int l = 0; l < BN; l++) {
-            const nvec q = cache[cache_index(cb, l)];
-            sm_real *o = out + ((size_t)slot * BN + (size_t)l) * D;
-            for (int a = 0; a < D; a++) o[a] += q[a];
-        }
+        CACHE_REACH_BEGIN(S, cb, l)
+        const nvec q = cache[cache_index(cb, l)];
+        sm_real *o = out + ((size_t)slot * BN + (size_t)l) * D;
+        for (int a = 0; a < D; a++) o[a] += q[a];
+        CACHE_REACH_END
     }
 }
 
@@ -163,8 +174,8 @@ static inline __attribute__((always_inline)) void pass_block(const sm_implicit_s
     const sm_bins *bins = s->bins;
     int bc[3];
     pblock_origin(pb, bc);
-    gather_block(pb, in, cin);
-    memset(cout, 0, NCACHE * sizeof(nvec));
+    gather_block(S, pb, in, cin);
+    clear_block(S, cout);
     wchunk wc;
     for (uint32_t idx = pb->start; idx < pb->end; idx++) {
         const size_t p = bins->perm[idx];
@@ -176,7 +187,7 @@ static inline __attribute__((always_inline)) void pass_block(const sm_implicit_s
         particle_matrix(s, kind, p, T, M);
         cache_scatter(S, &wc, j, M, cout);
     }
-    flush_block(pb, cout, out);
+    flush_block(S, pb, cout, out);
 }
 
 /* Work on one particle block of a colour sweep, on thread th. */

@@ -21,8 +21,6 @@
  * with lanes A = (m, m v, 0), C_e = (0, column e of m C, 0), V_e = (0, 0, column e of -V0 tau). */
 #include "core/dim.h"
 
-#include <string.h>
-
 #include "core/threads.h"
 #include "transfer/stencil_dim.h"
 

@@ -1,6 +1,6 @@
 /* The cost of an OpenMP parallel region that does nothing, with a team of one thread and of two,
  * and with an `if` clause (which still forms a team of one). Behind docs/benchmarks.md "Small
- * scenes, second look" and src/core/threads.h's SM_PARALLEL: libgomp ends every team, even one
+ * scenes, second look" and the former src/core/threads.h's SM_PARALLEL (now src/core/team.h): libgomp ends every team, even one
  * of a single thread, with a barrier whose last thread calls futex(FUTEX_WAKE), a system call.
  *   gcc -O2 -fopenmp docs/experiments/omp_region_cost.c -o /tmp/omp_region_cost
  *   /tmp/omp_region_cost 1; /tmp/omp_region_cost 2

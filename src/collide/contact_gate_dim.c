@@ -17,7 +17,7 @@
 #include <string.h>
 
 #include "collide/grid_collide.h"
-#include "core/threads.h"
+#include "core/team.h"
 #include "transfer/stencil_dim.h"
 
 /* The separating colliders of a step: whether each is a single half-space, and then phi(x) =
@@ -106,24 +106,42 @@ static void open_stencil(const sm_contact_gate_io *io, const sm_step_ctx *c, con
             }
 }
 
-void SM_FN(sm_contact_gate)(const sm_contact_gate_io *io, const sm_step_ctx *c) {
-    const sm_bins *bins = io->bins;
-    const long nb = (long)io->grid->nactive, npb = (long)bins->npb;
+typedef struct gate_job {
+    const sm_contact_gate_io *io;
+    const sm_step_ctx *c;
     gate_cols g;
-    gate_cols_init(io, c, &g);
-    SM_PARALLEL(c->threads, , {
-        SM_PRAGMA_(omp for schedule(static))
-        for (long s = 0; s < nb; s++) memset(io->gate + (size_t)s * BN, 0, BN);
-        SM_PRAGMA_(omp for schedule(dynamic, 16))
-        for (long k = 0; k < npb; k++) {
+    atomic_long next; /* the next particle block not taken (chunks of 16: blocks differ in cost) */
+} gate_job;
+
+static void gate_share(void *arg, int t, int T) {
+    gate_job *job = arg;
+    const sm_contact_gate_io *io = job->io;
+    const sm_step_ctx *c = job->c;
+    const sm_bins *bins = io->bins;
+    const long npb = (long)bins->npb;
+    long lo, hi;
+    sm_team_split((long)io->grid->nactive, T, t, &lo, &hi);
+    memset(io->gate + (size_t)lo * BN, 0, (size_t)(hi - lo) * BN);
+    sm_team_barrier();
+    for (;;) {
+        const long k0 = atomic_fetch_add_explicit(&job->next, 16, memory_order_relaxed);
+        if (k0 >= npb) break;
+        for (long k = k0; k < k0 + 16 && k < npb; k++) {
             const sm_pblock *pb = &bins->pb[k];
             const unsigned reach = block_reach(io, c, pb);
             if (!reach) continue;
             for (uint32_t i = pb->start; i < pb->end; i++) {
                 const size_t q = bins->perm[i];
-                const unsigned bits = particle_bits(io, c, &g, q, reach);
+                const unsigned bits = particle_bits(io, c, &job->g, q, reach);
                 if (bits) open_stencil(io, c, pb, q, bits);
             }
         }
-    });
+    }
+}
+
+void SM_FN(sm_contact_gate)(const sm_contact_gate_io *io, const sm_step_ctx *c) {
+    gate_job job = {.io = io, .c = c};
+    gate_cols_init(io, c, &job.g);
+    atomic_init(&job.next, 0);
+    sm_team_run(c->threads, gate_share, &job);
 }

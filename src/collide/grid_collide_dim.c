@@ -6,7 +6,7 @@
 #include "core/dim.h"
 
 #include "collide/grid_collide.h"
-#include "core/threads.h"
+#include "core/team.h"
 
 /* Position of grid node ni, m. */
 static inline void node_position(const sm_grid *g, const sm_step_ctx *c, size_t ni, double xi[3]) {
@@ -102,34 +102,59 @@ void SM_FN(sm_grid_collide_block)(const sm_grid_colliders *gc, const sm_grid *g,
     }
 }
 
-void SM_FN(sm_grid_collide_vector)(const sm_grid_colliders *gc, const sm_grid *g, const sm_step_ctx *c,
-                                   const sm_real *mass, size_t nodes, sm_real *z, sm_node_contact *rec) {
-    const long nl = (long)nodes;
-    SM_PARALLEL_FOR(c->threads, schedule(static), long l = 0; l < nl; l++, {
-        sm_node_contact *r = &rec[l];
+/* The operands of a pass over the nodes (sm_team_for's argument). */
+typedef struct nodes_job {
+    const sm_grid_colliders *gc;
+    const sm_grid *g;
+    const sm_step_ctx *c;
+    const sm_real *mass, *solution, *vstar, *vcollided;
+    sm_real *z, *vbar, *vtilde;
+    sm_node_contact *rec;
+} nodes_job;
+
+static void collide_nodes(void *arg, long lo, long hi) {
+    const nodes_job *job = arg;
+    const sm_grid_colliders *gc = job->gc;
+    const sm_real *mass = job->mass;
+    sm_real *z = job->z;
+    for (long l = lo; l < hi; l++) {
+        sm_node_contact *r = &job->rec[l];
         r->sticky = -1;
         r->count = 0;
         if (!(mass[l] > 0)) continue;
         double xi[3], v[3] = {0, 0, 0};
-        node_position(g, c, (size_t)l, xi);
+        node_position(job->g, job->c, (size_t)l, xi);
         for (int a = 0; a < D; a++) v[a] = (double)z[l * D + a];
-        (void)sm_collide_node_among(gc->cols, NULL, gc->count, D, xi, c->dt, INFINITY, node_gate(gc, (size_t)l), v, r);
+        (void)sm_collide_node_among(gc->cols, NULL, gc->count, D, xi, job->c->dt, INFINITY, node_gate(gc, (size_t)l), v, r);
         for (int a = 0; a < D; a++) z[l * D + a] = (sm_real)v[a];
-    });
+    }
+}
+
+void SM_FN(sm_grid_collide_vector)(const sm_grid_colliders *gc, const sm_grid *g, const sm_step_ctx *c,
+                                   const sm_real *mass, size_t nodes, sm_real *z, sm_node_contact *rec) {
+    nodes_job job = {.gc = gc, .g = g, .c = c, .mass = mass, .z = z, .rec = rec};
+    sm_team_for(c->threads, (long)nodes, collide_nodes, &job);
+}
+
+static void friction_nodes(void *arg, long lo, long hi) {
+    const nodes_job *job = arg;
+    const sm_node_contact *rec = job->rec;
+    for (long l = lo; l < hi; l++) {
+        double v[3] = {0, 0, 0}, dv[3] = {0, 0, 0}, xi[3] = {0, 0, 0};
+        for (int a = 0; a < D; a++) {
+            v[a] = (double)job->solution[l * D + a];
+            dv[a] = (double)job->vcollided[l * D + a] - (double)job->vstar[l * D + a];
+        }
+        if (rec[l].count > 0) node_position(job->g, job->c, (size_t)l, xi); /* (massless nodes have no contacts) */
+        node_friction(job->gc, xi, &rec[l], dv, v, job->vbar + l * D, job->vtilde + l * D);
+    }
 }
 
 void SM_FN(sm_grid_friction_after_solve)(const sm_grid_colliders *gc, const sm_grid *g, const sm_step_ctx *c,
                                          size_t nodes, const sm_node_contact *rec,
                                          const sm_real *solution, const sm_real *vstar, const sm_real *vcollided,
                                          sm_real *vbar, sm_real *vtilde) {
-    const long nl = (long)nodes;
-    SM_PARALLEL_FOR(c->threads, schedule(static), long l = 0; l < nl; l++, {
-        double v[3] = {0, 0, 0}, dv[3] = {0, 0, 0}, xi[3] = {0, 0, 0};
-        for (int a = 0; a < D; a++) {
-            v[a] = (double)solution[l * D + a];
-            dv[a] = (double)vcollided[l * D + a] - (double)vstar[l * D + a];
-        }
-        if (rec[l].count > 0) node_position(g, c, (size_t)l, xi); /* (massless nodes have no contacts) */
-        node_friction(gc, xi, &rec[l], dv, v, vbar + l * D, vtilde + l * D);
-    });
+    nodes_job job = {.gc = gc, .g = g, .c = c, .solution = solution, .vstar = vstar, .vcollided = vcollided,
+                     .vbar = vbar, .vtilde = vtilde, .rec = (sm_node_contact *)rec};
+    sm_team_for(c->threads, (long)nodes, friction_nodes, &job);
 }

@@ -38,6 +38,7 @@
  * each block is looked up). */
 #include <string.h>
 
+#include "core/team.h"
 #include "dist/dist_internal.h"
 #include "grid/grid.h"
 #include "world/world.h"
@@ -242,25 +243,39 @@ const sm_block_lists *sm_dist_outer_blocks(sm_world *w, size_t kept) {
     return &d->outer;
 }
 
-void sm_dist_replay(sm_world *w, int colour) {
-    const sm_dist *d = w->dist;
-    if (!d || d->nside == 0) return;
-    const size_t bn = (size_t)w->grid.block_nodes, dim = (size_t)d->dim;
-    const sm_grid_p2g side = side_arrays(d, bn), grid = sm_grid_p2g_arrays(&w->grid);
-    const long n = (long)d->nside;
-#pragma omp parallel for schedule(static) num_threads(w->threads > 0 ? w->threads : 1)
-    for (long s = 0; s < n; s++) {
-        if ((int)(d->side_key[s] & 7) != colour) continue;
-        const uint32_t slot = sm_block_hash_find(&w->grid.hash, d->side_key[s] >> 3); /* live: an E block touches it */
+typedef struct replay_job {
+    const sm_dist *d;
+    const sm_grid *grid_of;
+    sm_grid_p2g side, grid;
+    size_t bn, dim;
+    int colour;
+} replay_job;
+
+/* Side blocks [lo, hi) of the colour added into their grid blocks. */
+static void replay_range(void *arg, long lo, long hi) {
+    const replay_job *job = arg;
+    const sm_dist *d = job->d;
+    const size_t bn = job->bn, dim = job->dim;
+    for (long s = lo; s < hi; s++) {
+        if ((int)(d->side_key[s] & 7) != job->colour) continue;
+        const uint32_t slot = sm_block_hash_find(&job->grid_of->hash, d->side_key[s] >> 3); /* live: an E block touches it */
         for (size_t l = 0; l < bn; l++) {
             const size_t gi = (size_t)slot * bn + l, si = (size_t)s * bn + l;
-            grid.mass[gi] += side.mass[si];
+            job->grid.mass[gi] += job->side.mass[si];
             for (size_t a = 0; a < dim; a++) {
-                grid.momentum[gi * dim + a] += side.momentum[si * dim + a];
-                grid.force[gi * dim + a] += side.force[si * dim + a];
+                job->grid.momentum[gi * dim + a] += job->side.momentum[si * dim + a];
+                job->grid.force[gi * dim + a] += job->side.force[si * dim + a];
             }
         }
     }
+}
+
+void sm_dist_replay(sm_world *w, int colour) {
+    const sm_dist *d = w->dist;
+    if (!d || d->nside == 0) return;
+    const size_t bn = (size_t)w->grid.block_nodes;
+    replay_job job = {d, &w->grid, side_arrays(d, bn), sm_grid_p2g_arrays(&w->grid), bn, (size_t)d->dim, colour};
+    sm_team_for(w->threads > 0 ? w->threads : 1, (long)d->nside, replay_range, &job);
 }
 
 void sm_dist_set_overlap(sm_world *w, int mode) {

@@ -31,7 +31,7 @@
 
 #include <string.h>
 
-#include "core/threads.h"
+#include "core/team.h"
 #include "grid/bin.h"
 #include "transfer/kernel.h"
 
@@ -69,34 +69,53 @@ static inline void thread_share(size_t n, int T, int t, size_t *p0, size_t *p1) 
     *p1 = n * (size_t)(t + 1) / (size_t)T;
 }
 
+/* The work of the binning's parallel passes over thread shares t = 0 .. T-1 (each share is an
+ * item of sm_team_for: a team of fewer threads still does every share). */
+typedef struct count_job {
+    sm_bins *b;
+    const double *x;
+    size_t n;
+    const sm_step_ctx *c;
+    int T;
+    atomic_long misses;
+} count_job;
+
+static void count_shares(void *arg, long lo, long hi) {
+    count_job *job = arg;
+    const sm_bins *b = job->b;
+    const size_t nb = b->npb;
+    const sm_step_ctx *c = job->c;
+    long misses = 0;
+    for (int t = (int)lo; t < (int)hi; t++) {
+        size_t p0, p1;
+        thread_share(job->n, job->T, t, &p0, &p1);
+        uint32_t *ct = b->counts + (size_t)t * nb;
+        uint64_t last = UINT64_MAX;
+        uint32_t slot = SM_NO_SLOT;
+        for (size_t p = p0; p < p1; p++) {
+            uint64_t k = particle_key(c, job->x + p * D, c->stencil);
+            if (k != last) {
+                last = k;
+                slot = sm_block_hash_find(&b->pb_hash, k);
+            }
+            if (slot == SM_NO_SLOT) misses++;
+            else ct[slot]++;
+        }
+    }
+    atomic_fetch_add_explicit(&job->misses, misses, memory_order_relaxed);
+}
+
 /* 1. counts[t * npb + block] = thread t's particles in each known block; returns the particles
  * whose block is not known. */
 static sm_status count_known_blocks(sm_bins *b, const double *x, size_t n, const sm_step_ctx *c, int T,
                                     long *misses_out) {
     const size_t nb = b->npb;
-    const int S = c->stencil;
     if (grow((void **)&b->counts, &b->counts_cap, (size_t)T * nb + 1, sizeof(uint32_t)) != SM_OK) return SM_ERR_NOMEM;
     uint32_t *cnt = b->counts;
-    const sm_block_hash *ph = &b->pb_hash;
     memset(cnt, 0, (size_t)T * nb * sizeof(uint32_t));
-    long misses = 0;
-    SM_PARALLEL_FOR(T, schedule(static, 1) reduction(+ : misses), int t = 0; t < T; t++, {
-        size_t p0, p1;
-        thread_share(n, T, t, &p0, &p1);
-        uint32_t *ct = cnt + (size_t)t * nb;
-        uint64_t last = UINT64_MAX;
-        uint32_t slot = SM_NO_SLOT;
-        for (size_t p = p0; p < p1; p++) {
-            uint64_t k = particle_key(c, x + p * D, S);
-            if (k != last) {
-                last = k;
-                slot = sm_block_hash_find(ph, k);
-            }
-            if (slot == SM_NO_SLOT) misses++;
-            else ct[slot]++;
-        }
-    });
-    *misses_out = misses;
+    count_job job = {b, x, n, c, T, 0};
+    sm_team_for(T, T, count_shares, &job);
+    *misses_out = (long)atomic_load(&job.misses);
     return SM_OK;
 }
 
@@ -153,26 +172,31 @@ static size_t sort_blocks(sm_bins *b, int T) {
 }
 
 /* 3b. perm: every particle at its thread's cursor of its block. */
-static void scatter_particles(sm_bins *b, const double *x, size_t n, const sm_step_ctx *c, int T) {
+static void scatter_shares(void *arg, long lo, long hi) {
+    const count_job *job = arg;
+    sm_bins *b = job->b;
     const size_t nb = b->npb;
-    const int S = c->stencil;
-    const sm_block_hash *ph = &b->pb_hash;
-    uint32_t *cnt = b->counts, *perm = b->perm;
-    SM_PARALLEL_FOR(T, schedule(static, 1), int t = 0; t < T; t++, {
+    const sm_step_ctx *c = job->c;
+    for (int t = (int)lo; t < (int)hi; t++) {
         size_t p0, p1;
-        thread_share(n, T, t, &p0, &p1);
-        uint32_t *ct = cnt + (size_t)t * nb;
+        thread_share(job->n, job->T, t, &p0, &p1);
+        uint32_t *ct = b->counts + (size_t)t * nb;
         uint64_t last = UINT64_MAX;
         uint32_t slot = 0;
         for (size_t p = p0; p < p1; p++) {
-            uint64_t k = particle_key(c, x + p * D, S);
+            uint64_t k = particle_key(c, job->x + p * D, c->stencil);
             if (k != last) {
                 last = k;
-                slot = sm_block_hash_find(ph, k);
+                slot = sm_block_hash_find(&b->pb_hash, k);
             }
-            perm[ct[slot]++] = (uint32_t)p;
+            b->perm[ct[slot]++] = (uint32_t)p;
         }
-    });
+    }
+}
+
+static void scatter_particles(sm_bins *b, const double *x, size_t n, const sm_step_ctx *c, int T) {
+    count_job job = {b, x, n, c, T, 0};
+    sm_team_for(T, T, scatter_shares, &job);
 }
 
 /* 3c. The new block list (ascending key, with its range in perm) and its hash. After the
@@ -218,13 +242,23 @@ static uint32_t sort_by_id(uint32_t *perm, const uint32_t *id, uint32_t s, uint3
     return moved;
 }
 
-static void order_by_id(sm_bins *b, const uint32_t *id, int T) {
-    uint32_t *perm = b->perm;
-    const long nb = (long)b->npb;
-    SM_PARALLEL_FOR(T, schedule(static), long r = 0; r < nb; r++, {
-        const uint32_t moved = sort_by_id(perm, id, b->pb[r].start, b->pb[r].end);
+typedef struct id_job {
+    sm_bins *b;
+    const uint32_t *id;
+} id_job;
+
+static void order_blocks_by_id(void *arg, long lo, long hi) {
+    const id_job *job = arg;
+    sm_bins *b = job->b;
+    for (long r = lo; r < hi; r++) {
+        const uint32_t moved = sort_by_id(b->perm, job->id, b->pb[r].start, b->pb[r].end);
         b->pb[r].ascending = !moved; /* the scatter's order increases; any move breaks it */
-    });
+    }
+}
+
+static void order_by_id(sm_bins *b, const uint32_t *id, int T) {
+    id_job job = {b, id};
+    sm_team_for(T, (long)b->npb, order_blocks_by_id, &job);
 }
 
 /* Key of grid block cb (0 .. 2^d - 1) of particle block bc; 0 in *inside if outside the domain. */
@@ -335,6 +369,18 @@ static int blocks_hold(sm_bins *b, const sm_particles *P, const sm_step_ctx *c, 
     return 1;
 }
 
+typedef struct hold_job {
+    sm_bins *b;
+    const sm_particles *P;
+    const sm_step_ctx *c;
+    atomic_int held;
+} hold_job;
+
+static void blocks_hold_range(void *arg, long lo, long hi) {
+    hold_job *job = arg;
+    if (!blocks_hold(job->b, job->P, job->c, (size_t)lo, (size_t)hi)) atomic_store_explicit(&job->held, 0, memory_order_relaxed);
+}
+
 /* 0. The last binning holds again when it was made for the same particle count, kernel, domain and
  * grid, and every one of its blocks holds (blocks_hold): perm is a permutation of the n
  * particles, so each particle is in its own block's stretch, sorted by id, and the non-empty
@@ -345,13 +391,9 @@ static int bins_still_hold(sm_bins *b, const sm_particles *P, const sm_grid *g, 
     const sm_bins_basis now = basis_of(P, g, c);
     if (!b->basis.valid || !same_basis(&now, &b->basis)) return 0;
     if (b->npb == 0 || b->pb[0].start != 0 || b->pb[b->npb - 1].end != P->n) return 0;
-    int held = 1;
-    SM_PARALLEL_FOR(T, schedule(static, 1) reduction(& : held), int t = 0; t < T; t++, {
-        size_t r0, r1;
-        thread_share(b->npb, T, t, &r0, &r1);
-        held &= blocks_hold(b, P, c, r0, r1);
-    });
-    return held;
+    hold_job job = {b, P, c, 1};
+    sm_team_for(T, (long)b->npb, blocks_hold_range, &job);
+    return atomic_load(&job.held);
 }
 
 /* ---- A second batch -------------------------------------------------------------------- */
@@ -420,6 +462,20 @@ static size_t make_room(sm_bins *b, size_t old) {
     return touched;
 }
 
+/* Touched blocks [lo, hi) (their indices in counts) in ascending id. */
+static void order_touched_by_id(void *arg, long lo, long hi) {
+    const id_job *job = arg;
+    sm_bins *b = job->b;
+    for (long t = lo; t < hi; t++) {
+        sm_pblock *pb = &b->pb[b->counts[t] & ~(1u << 31)];
+        const uint32_t s = pb->start, e = pb->end;
+        sort_by_id(b->perm, job->id, s, e);
+        uint32_t increasing = 1; /* (the old particles may have been moved by the first binning's sort) */
+        for (uint32_t i = s + 1; i < e; i++) increasing &= b->perm[i] > b->perm[i - 1];
+        pb->ascending = increasing;
+    }
+}
+
 /* Particles [first, n) at their blocks' cursors; then each block that gained some in ascending id
  * (an insertion sort: its old particles are in order already), `ascending` as order_by_id leaves
  * it. */
@@ -435,17 +491,8 @@ static void scatter_more(sm_bins *b, const sm_particles *P, size_t first, const 
         }
         b->perm[b->pb[slot].more++] = (uint32_t)p;
     }
-    uint32_t *perm = b->perm;
-    const uint32_t *id = P->id;
-    const long nt = (long)touched;
-    SM_PARALLEL_FOR(T, schedule(static), long t = 0; t < nt; t++, {
-        sm_pblock *pb = &b->pb[b->counts[t] & ~(1u << 31)];
-        const uint32_t s = pb->start, e = pb->end;
-        sort_by_id(perm, id, s, e);
-        uint32_t increasing = 1; /* (the old particles may have been moved by the first binning's sort) */
-        for (uint32_t i = s + 1; i < e; i++) increasing &= perm[i] > perm[i - 1];
-        pb->ascending = increasing;
-    });
+    id_job job = {b, P->id};
+    sm_team_for(T, (long)touched, order_touched_by_id, &job);
 }
 
 /* The grid blocks that the blocks new to the binning touch and that are not live yet: merged into

@@ -1,7 +1,7 @@
 /* Sparse block grid storage; see grid.h. */
 #include <string.h>
 
-#include "core/threads.h"
+#include "core/team.h"
 #include "grid/grid.h"
 
 sm_status sm_block_hash_reserve(sm_block_hash *h, size_t n) {
@@ -78,17 +78,22 @@ sm_status sm_grid_reserve(sm_grid *g, size_t nblocks) {
     return SM_OK;
 }
 
+typedef struct zero_job {
+    sm_grid_p2g a;
+    size_t bn, d;
+} zero_job;
+
+static void zero_blocks(void *arg, long lo, long hi) {
+    const zero_job *z = arg;
+    const size_t b0 = (size_t)lo, nb = (size_t)(hi - lo), bn = z->bn, d = z->d;
+    memset(z->a.mass + b0 * bn, 0, nb * bn * sizeof(sm_real));
+    memset(z->a.momentum + b0 * bn * d, 0, nb * bn * d * sizeof(sm_real));
+    memset(z->a.force + b0 * bn * d, 0, nb * bn * d * sizeof(sm_real));
+}
+
 void sm_grid_zero(sm_grid *g, int threads) {
-    const size_t bn = (size_t)g->block_nodes, d = (size_t)g->dim;
-    long nb = (long)g->nactive;
-    const sm_grid_p2g a = sm_grid_p2g_arrays(g);
-    (void)threads;
-    SM_PARALLEL_FOR(threads, schedule(static), long t = 0; t < nb; t++, {
-        size_t b = (size_t)t;
-        memset(a.mass + b * bn, 0, bn * sizeof(sm_real));
-        memset(a.momentum + b * bn * d, 0, bn * d * sizeof(sm_real));
-        memset(a.force + b * bn * d, 0, bn * d * sizeof(sm_real));
-    });
+    zero_job z = {sm_grid_p2g_arrays(g), (size_t)g->block_nodes, (size_t)g->dim};
+    sm_team_for(threads, (long)g->nactive, zero_blocks, &z);
 }
 
 /* The P2G arrays of g (mass, momentum, force) and their values per node. */

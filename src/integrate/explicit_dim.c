@@ -7,7 +7,7 @@
  * velocities are then tested for a non-finite value (the grid's health check, health.h). */
 #include "core/dim.h"
 
-#include "core/threads.h"
+#include "core/team.h"
 #include "integrate/explicit.h"
 
 /* 0 * every velocity of block b, summed: NaN iff one is not finite (the grid's health check,
@@ -18,18 +18,26 @@ static sm_real block_nonfinite(const sm_real *vbar, const sm_real *vtilde, size_
     return z;
 }
 
-int SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c) {
+typedef struct update_job {
+    const sm_grid_update_io *io;
+    const sm_step_ctx *c;
+    atomic_int bad;
+} update_job;
+
+/* v^n, v* (into v-bar and v-tilde: their values where no collider acts), then the colliders, for
+ * blocks [lo, hi). */
+static void update_blocks(void *arg, long lo, long hi) {
+    update_job *job = arg;
+    const sm_grid_update_io *io = job->io;
+    const sm_step_ctx *c = job->c;
     const sm_grid *g = io->grid;
-    const long nb = (long)g->nactive;
     const size_t bn = (size_t)g->block_nodes;
     const sm_real dtr = (sm_real)c->dt;
     const sm_real *mass = io->in.mass, *momentum = io->in.momentum, *force = io->in.force;
     sm_real *vn_out = io->out.vn, *vbar = io->out.vbar, *vtilde = io->out.vtilde;
     int bad = 0;
-    SM_PARALLEL_FOR(c->threads, schedule(static) reduction(| : bad), long t = 0; t < nb; t++, {
-        const size_t b = (size_t)t;
-        /* v^n, v* (into v-bar and v-tilde: their values where no collider acts) and the largest |v*|. */
-        double vmax2 = 0;
+    for (size_t b = (size_t)lo; b < (size_t)hi; b++) {
+        double vmax2 = 0; /* the largest |v*| */
         for (size_t ni = b * bn; ni < (b + 1) * bn; ni++) {
             sm_real m = mass[ni];
             sm_real inv_m = m > 0 ? SM_R(1.0) / m : 0;
@@ -47,6 +55,12 @@ int SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c) {
         SM_FN(sm_grid_collide_block)(&io->colliders, g, c, b, vmax2, mass, vbar, vtilde);
         const sm_real z = block_nonfinite(vbar, vtilde, b, bn);
         bad |= z != 0 || z != z;
-    });
-    return !bad;
+    }
+    if (bad) atomic_store_explicit(&job->bad, 1, memory_order_relaxed);
+}
+
+int SM_FN(sm_grid_update)(const sm_grid_update_io *io, const sm_step_ctx *c) {
+    update_job job = {io, c, 0};
+    sm_team_for(c->threads, (long)io->grid->nactive, update_blocks, &job);
+    return !atomic_load(&job.bad);
 }

@@ -20,13 +20,24 @@
 
 #include <string.h>
 
-#include "core/threads.h"
+#include "core/team.h"
 #include "integrate/implicit_solver.h"
 
-double SM_FN(sm_imp_dot)(const sm_implicit_sys *s, const sm_real *a, const sm_real *b) {
-    const sm_implicit_ws *ws = s->ws;
-    const long nb = (long)s->grid->nactive;
-    SM_PARALLEL_FOR(s->c->threads, schedule(static), long t = 0; t < nb; t++, {
+/* The operands of a pass over grid blocks or nodes (sm_team_for's argument). */
+typedef struct ops_job {
+    const sm_implicit_sys *s;
+    const sm_real *a, *b;
+    sm_real *y;
+    int prune;
+    double dtg2;
+} ops_job;
+
+/* Each block's mass-weighted a . b into ws->partial. */
+static void dot_blocks(void *arg, long lo, long hi) {
+    const ops_job *job = arg;
+    const sm_implicit_ws *ws = job->s->ws;
+    const sm_real *a = job->a, *b = job->b;
+    for (long t = lo; t < hi; t++) {
         double sum = 0;
         for (size_t l = (size_t)t * BN; l < (size_t)(t + 1) * BN; l++) {
             double m = (double)ws->mass[l];
@@ -34,7 +45,12 @@ double SM_FN(sm_imp_dot)(const sm_implicit_sys *s, const sm_real *a, const sm_re
             for (int k = 0; k < D; k++) sum += m * (double)a[l * D + k] * (double)b[l * D + k];
         }
         ws->partial[t] = sum;
-    });
+    }
+}
+
+double SM_FN(sm_imp_dot)(const sm_implicit_sys *s, const sm_real *a, const sm_real *b) {
+    ops_job job = {.s = s, .a = a, .b = b};
+    sm_team_for(s->c->threads, (long)s->grid->nactive, dot_blocks, &job);
     return SM_FN(sm_imp_block_sum)(s);
 }
 
@@ -72,11 +88,14 @@ static void forget_contact(sm_node_contact *rec, int k) {
     rec->count--;
 }
 
-void SM_FN(sm_imp_project)(const sm_implicit_sys *s, sm_real *y, int prune) {
+static void project_nodes(void *arg, long lo, long hi) {
+    const ops_job *job = arg;
+    const sm_implicit_sys *s = job->s;
     sm_implicit_ws *ws = s->ws;
     const sm_collider *cols = s->colliders.cols;
-    const long nl = (long)s->nodes;
-    SM_PARALLEL_FOR(s->c->threads, schedule(static), long l = 0; l < nl; l++, {
+    sm_real *y = job->y;
+    const int prune = job->prune;
+    for (long l = lo; l < hi; l++) {
         sm_node_contact *rec = &ws->contact[l];
         sm_real *v = y + l * D;
         if (!(ws->mass[l] > 0) || rec->sticky >= 0) {
@@ -95,7 +114,12 @@ void SM_FN(sm_imp_project)(const sm_implicit_sys *s, sm_real *y, int prune) {
             }
             for (int a = 0; a < D; a++) v[a] = (sm_real)((double)v[a] - vn * nrm[a]);
         }
-    });
+    }
+}
+
+void SM_FN(sm_imp_project)(const sm_implicit_sys *s, sm_real *y, int prune) {
+    ops_job job = {.s = s, .y = y, .prune = prune};
+    sm_team_for(s->c->threads, (long)s->nodes, project_nodes, &job);
 }
 
 void SM_FN(sm_imp_residual)(const sm_implicit_sys *s, const sm_real *z, sm_real *y) {
@@ -123,13 +147,12 @@ void SM_FN(sm_imp_vstar)(const sm_implicit_sys *s, sm_real *vstar) {
             vstar[l * D + a] = ws->mass[l] > 0 ? ws->vn[l * D + a] + dt * g[a] - dt / ws->mass[l] * ws->force[l * D + a] : 0;
 }
 
-double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z) {
-    const sm_implicit_ws *ws = s->ws;
-    const long nb = (long)s->grid->nactive;
-    double g2 = 0;
-    for (int a = 0; a < D; a++) g2 += (double)s->c->gravity[a] * (double)s->c->gravity[a];
-    const double dt = s->c->dt, dtg2 = dt * dt * g2;
-    SM_PARALLEL_FOR(s->c->threads, schedule(static), long t = 0; t < nb; t++, {
+static void term_scale_blocks(void *arg, long lo, long hi) {
+    const ops_job *job = arg;
+    const sm_implicit_ws *ws = job->s->ws;
+    const sm_real *z = job->a;
+    const double dt = job->s->c->dt, dtg2 = job->dtg2;
+    for (long t = lo; t < hi; t++) {
         double sum = 0;
         for (size_t l = (size_t)t * BN; l < (size_t)(t + 1) * BN; l++) {
             const double m = (double)ws->mass[l];
@@ -142,7 +165,15 @@ double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z) {
             sum += m * q;
         }
         ws->partial[t] = sum;
-    });
+    }
+}
+
+double SM_FN(sm_imp_term_scale2)(const sm_implicit_sys *s, const sm_real *z) {
+    double g2 = 0;
+    for (int a = 0; a < D; a++) g2 += (double)s->c->gravity[a] * (double)s->c->gravity[a];
+    const double dt = s->c->dt;
+    ops_job job = {.s = s, .a = z, .dtg2 = dt * dt * g2};
+    sm_team_for(s->c->threads, (long)s->grid->nactive, term_scale_blocks, &job);
     return SM_FN(sm_imp_block_sum)(s);
 }
 

@@ -18,7 +18,7 @@
 
 #include <string.h>
 
-#include "core/threads.h"
+#include "core/team.h"
 #include "integrate/implicit_solver.h"
 #include "transfer/stencil_dim.h"
 
@@ -196,23 +196,32 @@ typedef void (*block_fn)(const sm_implicit_sys *s, const sm_pblock *pb, int th, 
 /* fn for every particle block this rank needs, colour by colour (no two threads reach a node at
  * once; the same order per node for any thread count), the blocks of a colour split among the
  * threads in contiguous ranges of equal particle counts (sm_bins_range). */
-static void sweep_by_colour(const sm_implicit_sys *s, block_fn fn, void *arg) {
+typedef struct sweep_job {
+    const sm_implicit_sys *s;
+    block_fn fn;
+    void *arg;
+} sweep_job;
+
+static void sweep_share(void *arg, int th, int nt) {
+    const sweep_job *job = arg;
+    const sm_implicit_sys *s = job->s;
     const sm_bins *bins = s->bins;
-    SM_PARALLEL(s->c->threads, , {
-        int th, nt;
-        sm_thread_team(&th, &nt);
-        for (int col = 0; col < NCOLORS; col++) {
-            if (bins->color_offset[col] == bins->color_offset[col + 1]) continue; /* the same on every thread */
-            long lo, hi;
-            sm_bins_range(bins, bins->color_blocks, (long)bins->color_offset[col], (long)bins->color_offset[col + 1], nt,
-                          th, &lo, &hi);
-            for (long t = lo; t < hi; t++) {
-                const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
-                if (pblock_needed(s, pb)) fn(s, pb, th, arg);
-            }
-            SM_PRAGMA_(omp barrier);
+    for (int col = 0; col < NCOLORS; col++) {
+        if (bins->color_offset[col] == bins->color_offset[col + 1]) continue; /* the same on every thread */
+        long lo, hi;
+        sm_bins_range(bins, bins->color_blocks, (long)bins->color_offset[col], (long)bins->color_offset[col + 1], nt, th,
+                      &lo, &hi);
+        for (long t = lo; t < hi; t++) {
+            const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
+            if (pblock_needed(s, pb)) job->fn(s, pb, th, job->arg);
         }
-    });
+        sm_team_barrier();
+    }
+}
+
+static void sweep_by_colour(const sm_implicit_sys *s, block_fn fn, void *arg) {
+    sweep_job job = {s, fn, arg};
+    sm_team_run(s->c->threads, sweep_share, &job);
 }
 
 typedef struct {

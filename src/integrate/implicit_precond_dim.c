@@ -18,7 +18,7 @@
 
 #include <string.h>
 
-#include "core/threads.h"
+#include "core/team.h"
 #include "integrate/implicit_solver.h"
 #include "transfer/stencil_dim.h"
 
@@ -116,13 +116,17 @@ static int well_posed(const double *S) {
  * posed, else the scalar 1 / max(1, tr B / d). Where the stiffness block is indefinite
  * (compressed, plastic) B^-1 itself can be huge along a direction J does not amplify, and
  * Newton's step with it diverged (an elastic block at 10x the explicit dt limit). */
-void SM_FN(sm_imp_precond_build)(const sm_implicit_sys *s) {
-    sm_implicit_ws *ws = s->ws;
-    memset(ws->pinv, 0, s->nodes * DD * sizeof(sm_real));
-    SM_FN(sm_imp_scatter_by_colour)(s, scatter_particle_blocks, NULL, ws->pinv);
-    const double dt2 = s->c->dt * s->c->dt;
-    const long nl = (long)s->nodes;
-    SM_PARALLEL_FOR(s->c->threads, schedule(static), long l = 0; l < nl; l++, {
+typedef struct precond_job {
+    const sm_implicit_sys *s;
+    const sm_real *x;
+    sm_real *out;
+} precond_job;
+
+static void invert_nodes(void *arg, long lo, long hi) {
+    const precond_job *job = arg;
+    sm_implicit_ws *ws = job->s->ws;
+    const double dt2 = job->s->c->dt * job->s->c->dt;
+    for (long l = lo; l < hi; l++) {
         sm_real *blk = ws->pinv + l * DD;
         const double m = (double)ws->mass[l];
         double S[DD], inv[DD], trace = 0;
@@ -137,19 +141,32 @@ void SM_FN(sm_imp_precond_build)(const sm_implicit_sys *s) {
             for (int k = 0; k < DD; k++) inv[k] = k % (D + 1) == 0 ? sc : 0.0;
         }
         for (int k = 0; k < DD; k++) blk[k] = m > 0 ? (sm_real)inv[k] : 0;
-    });
+    }
 }
 
-void SM_FN(sm_imp_precond_apply)(const sm_implicit_sys *s, const sm_real *x, sm_real *out) {
-    const sm_implicit_ws *ws = s->ws;
-    const long nl = (long)s->nodes;
-    SM_PARALLEL_FOR(s->c->threads, schedule(static), long l = 0; l < nl; l++, {
+void SM_FN(sm_imp_precond_build)(const sm_implicit_sys *s) {
+    sm_implicit_ws *ws = s->ws;
+    memset(ws->pinv, 0, s->nodes * DD * sizeof(sm_real));
+    SM_FN(sm_imp_scatter_by_colour)(s, scatter_particle_blocks, NULL, ws->pinv);
+    precond_job job = {s, NULL, NULL};
+    sm_team_for(s->c->threads, (long)s->nodes, invert_nodes, &job);
+}
+
+static void apply_nodes(void *arg, long lo, long hi) {
+    const precond_job *job = arg;
+    const sm_implicit_ws *ws = job->s->ws;
+    for (long l = lo; l < hi; l++) {
         const sm_real *inv = ws->pinv + l * DD;
         for (int b = 0; b < D; b++) {
             double acc = 0;
-            for (int a = 0; a < D; a++) acc += (double)inv[b * D + a] * (double)x[l * D + a];
-            out[l * D + b] = (sm_real)acc;
+            for (int a = 0; a < D; a++) acc += (double)inv[b * D + a] * (double)job->x[l * D + a];
+            job->out[l * D + b] = (sm_real)acc;
         }
-    });
+    }
+}
+
+void SM_FN(sm_imp_precond_apply)(const sm_implicit_sys *s, const sm_real *x, sm_real *out) {
+    precond_job job = {s, x, out};
+    sm_team_for(s->c->threads, (long)s->nodes, apply_nodes, &job);
     SM_FN(sm_imp_project)(s, out, 0); /* keep the step in P's range: J does not see the rest, collisions would */
 }

@@ -21,7 +21,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "core/threads.h"
+#include "core/team.h"
 #include "core/timer.h"
 #include "integrate/health.h"
 #include "world/world.h"
@@ -428,18 +428,29 @@ int sm_world_step_refused(const sm_world *w) { return w && !w->failed && w->step
 
 double sm_world_time(const sm_world *w) { return w->time; }
 
+typedef struct speed_job {
+    const sm_real *v;
+    int d;
+    _Atomic double m2;
+} speed_job;
+
+static void speed_range(void *arg, long lo, long hi) {
+    speed_job *job = arg;
+    const int d = job->d;
+    double m2 = 0;
+    for (long p = lo; p < hi; p++) {
+        double s = 0;
+        for (int a = 0; a < d; a++) s += (double)job->v[p * d + a] * (double)job->v[p * d + a];
+        if (s > m2) m2 = s;
+    }
+    sm_team_max(&job->m2, m2);
+}
+
 static double max_particle_speed(const sm_world *w) {
     if (!w->dirty) return sqrt(w->step_vmax2); /* measured by the last G2P */
-    const int d = w->dim;
-    const long n = (long)w->p.n;
-    const sm_real *v = w->p.v;
-    double m2 = 0;
-    SM_PARALLEL_FOR(w->threads, schedule(static) reduction(max : m2), long p = 0; p < n; p++, {
-        double s = 0;
-        for (int a = 0; a < d; a++) s += (double)v[p * d + a] * (double)v[p * d + a];
-        if (s > m2) m2 = s;
-    });
-    return sqrt(m2);
+    speed_job job = {w->p.v, w->dim, 0};
+    sm_team_for(w->threads, (long)w->p.n, speed_range, &job);
+    return sqrt(atomic_load(&job.m2));
 }
 
 /* The implicit step-size rule: from the last step's dt and its Newton iterations (both in the

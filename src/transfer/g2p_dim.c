@@ -18,7 +18,7 @@
 
 #include <string.h>
 
-#include "core/threads.h"
+#include "core/team.h"
 #include "transfer/stencil_dim.h"
 
 /* Gathers the nodes of particle block pb's 2^d grid blocks that its particles can reach
@@ -256,41 +256,54 @@ static inline __attribute__((always_inline)) void g2p_block(const sm_g2p_io *io,
     }
 }
 
-void SM_FN(sm_g2p)(const sm_g2p_io *io, const sm_step_ctx *c, sm_g2p_stats *st) {
+typedef struct g2p_job {
+    const sm_g2p_io *io;
+    const sm_step_ctx *c;
+    atomic_ullong clamped, projected, bad;
+    _Atomic double vmax2;
+} g2p_job;
+
+/* Thread t's share of the particle blocks (equal particle counts, as in P2G). */
+static void g2p_share(void *arg, int t, int T) {
+    g2p_job *job = arg;
+    const sm_g2p_io *io = job->io;
+    const sm_step_ctx *c = job->c;
     const int S = c->stencil;
     const sm_bins *bins = io->bins;
-    const long nb = (long)bins->npb;
-    vec *caches = (vec *)io->cache;
+    vec *cache = (vec *)io->cache + (size_t)t * NCACHE;
     unsigned long long clamped = 0, projected = 0, bad = 0;
     double vmax2 = 0;
-#pragma omp parallel num_threads(c->threads) reduction(+ : clamped, projected, bad) reduction(max : vmax2)
-    {
-        int t, T;
-        sm_thread_team(&t, &T);
-        vec *cache = caches + (size_t)t * NCACHE;
-        long blo, bhi;
-        sm_bins_range(bins, NULL, 0, nb, T, t, &blo, &bhi);
-        for (long b = blo; b < bhi; b++) {
-            const sm_pblock *pb = &bins->pb[b];
-            if (bins->perm[pb->start] >= io->owned) continue; /* a ghost block */
-            g2p_gather(io, c, pb, cache);
-            g2p_acc acc;
-            for (int a = 0; a < D; a++) {
-                acc.lo[a] = INFINITY;
-                acc.hi[a] = -INFINITY;
-            }
-            acc.vmax2 = acc.nan = 0;
-            acc.clamped = 0;
-            if (S == 3) g2p_block(io, c, 3, pb, cache, &acc);
-            else g2p_block(io, c, 4, pb, cache, &acc);
-            clamped += acc.clamped;
-            if (acc.nan != 0 || acc.nan != acc.nan) bad++;
-            else if (io->particle_projection && io->ncolliders > 0) projected += project_block(io, pb, &acc);
-            if ((double)acc.vmax2 > vmax2) vmax2 = (double)acc.vmax2;
+    long blo, bhi;
+    sm_bins_range(bins, NULL, 0, (long)bins->npb, T, t, &blo, &bhi);
+    for (long b = blo; b < bhi; b++) {
+        const sm_pblock *pb = &bins->pb[b];
+        if (bins->perm[pb->start] >= io->owned) continue; /* a ghost block */
+        g2p_gather(io, c, pb, cache);
+        g2p_acc acc;
+        for (int a = 0; a < D; a++) {
+            acc.lo[a] = INFINITY;
+            acc.hi[a] = -INFINITY;
         }
+        acc.vmax2 = acc.nan = 0;
+        acc.clamped = 0;
+        if (S == 3) g2p_block(io, c, 3, pb, cache, &acc);
+        else g2p_block(io, c, 4, pb, cache, &acc);
+        clamped += acc.clamped;
+        if (acc.nan != 0 || acc.nan != acc.nan) bad++;
+        else if (io->particle_projection && io->ncolliders > 0) projected += project_block(io, pb, &acc);
+        if ((double)acc.vmax2 > vmax2) vmax2 = (double)acc.vmax2;
     }
-    st->clamped = clamped;
-    st->projected = projected;
-    st->vmax2 = vmax2;
-    st->bad = bad > 0;
+    atomic_fetch_add_explicit(&job->clamped, clamped, memory_order_relaxed);
+    atomic_fetch_add_explicit(&job->projected, projected, memory_order_relaxed);
+    atomic_fetch_add_explicit(&job->bad, bad, memory_order_relaxed);
+    sm_team_max(&job->vmax2, vmax2);
+}
+
+void SM_FN(sm_g2p)(const sm_g2p_io *io, const sm_step_ctx *c, sm_g2p_stats *st) {
+    g2p_job job = {io, c, 0, 0, 0, 0};
+    sm_team_run(c->threads, g2p_share, &job);
+    st->clamped = atomic_load(&job.clamped);
+    st->projected = atomic_load(&job.projected);
+    st->vmax2 = atomic_load(&job.vmax2);
+    st->bad = atomic_load(&job.bad) > 0;
 }

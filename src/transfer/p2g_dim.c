@@ -21,7 +21,7 @@
  * with lanes A = (m, m v, 0), C_e = (0, column e of m C, 0), V_e = (0, 0, column e of -V0 tau). */
 #include "core/dim.h"
 
-#include "core/threads.h"
+#include "core/team.h"
 #include "transfer/stencil_dim.h"
 
 /* Particle p's lane vectors A, C_e, V_e (see the top of the file). */
@@ -141,25 +141,37 @@ static inline __attribute__((always_inline)) void p2g_block(const sm_p2g_io *io,
     p2g_flush(S, pb, cache, &io->grid, &io->side);
 }
 
-void SM_FN(sm_p2g)(const sm_p2g_io *io, const sm_step_ctx *c) {
+typedef struct p2g_job {
+    const sm_p2g_io *io;
+    const sm_step_ctx *c;
+} p2g_job;
+
+/* Thread t's share of each colour's blocks, the colours one after another. */
+static void p2g_share(void *arg, int t, int T) {
+    const p2g_job *job = arg;
+    const sm_p2g_io *io = job->io;
+    const sm_step_ctx *c = job->c;
     const int S = c->stencil;
     const sm_bins *bins = io->bins;
     const uint32_t *list = io->lists ? io->lists->blocks : bins->color_blocks;
     const uint32_t *offset = io->lists ? io->lists->offset : bins->color_offset;
-    vec *caches = (vec *)io->cache;
-    SM_PARALLEL(c->threads, , {
-        int t, T;
-        sm_thread_team(&t, &T);
-        vec *cache = caches + (size_t)t * NCACHE;
-        for (int col = 0; col < NCOLORS; col++) {
-            if (offset[col] == offset[col + 1]) continue; /* the same on every thread: no barrier needed */
-            long lo, hi;
-            sm_bins_range(bins, list, (long)offset[col], (long)offset[col + 1], T, t, &lo, &hi);
-            if (S == 3)
-                for (long k = lo; k < hi; k++) p2g_block(io, c, 3, list[k], cache);
-            else
-                for (long k = lo; k < hi; k++) p2g_block(io, c, 4, list[k], cache);
-            SM_PRAGMA_(omp barrier);
-        }
-    });
+    vec *cache = (vec *)io->cache + (size_t)t * NCACHE;
+    int last = -1; /* the last colour with blocks: the run's end is its barrier */
+    for (int col = 0; col < NCOLORS; col++)
+        if (offset[col] != offset[col + 1]) last = col;
+    for (int col = 0; col <= last; col++) {
+        if (offset[col] == offset[col + 1]) continue; /* the same on every thread: no barrier needed */
+        long lo, hi;
+        sm_bins_range(bins, list, (long)offset[col], (long)offset[col + 1], T, t, &lo, &hi);
+        if (S == 3)
+            for (long k = lo; k < hi; k++) p2g_block(io, c, 3, list[k], cache);
+        else
+            for (long k = lo; k < hi; k++) p2g_block(io, c, 4, list[k], cache);
+        if (col < last) sm_team_barrier();
+    }
+}
+
+void SM_FN(sm_p2g)(const sm_p2g_io *io, const sm_step_ctx *c) {
+    p2g_job job = {io, c};
+    sm_team_run(c->threads, p2g_share, &job);
 }

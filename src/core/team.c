@@ -1,0 +1,259 @@
+/* The step's thread team (team.h).
+ *
+ * A pool: the calling thread (number 0) and workers 1 .. n, each waiting for the next run on
+ * `dispatch` (run number << 32 | T). A run publishes fn and arg, then a new dispatch word; the
+ * workers numbered below T call fn, and every thread of the run ends in the barrier, after which
+ * the caller returns. The barrier is a counter of arrivals and a generation number that the last
+ * thread to arrive advances.
+ *
+ * Waiting: poll the word, yield, then sleep on the pool's condition variable (below). A
+ * thread about to sleep first counts itself in `sleepers` and then checks the word under the
+ * mutex; one that changes a word stores it first and then reads `sleepers`. Both in sequentially
+ * consistent order, so either the sleeper sees the new word or the changer sees the sleeper and
+ * broadcasts (under the mutex): no wake-up is lost, and none is paid for when nobody sleeps. */
+#define _GNU_SOURCE /* sched_getaffinity; pthread_sigmask, sigfillset */
+
+#include "core/team.h"
+
+#include <pthread.h>
+#include <sched.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define CPU_RELAX() _mm_pause()
+#else
+#define CPU_RELAX() ((void)0)
+#endif
+
+/* Waiting: SM_TEAM_SPIN polls with a pause between them (about 0.35 ms here: 4096 pauses take
+ * 82-91 us, docs/experiments/team_cost.c), then SM_TEAM_YIELDS polls that give the core away
+ * (sched_yield: a thread the wait is for may be waiting for a core), then sleep. Long enough to
+ * span a step's serial parts (with 1,024 polls, 2D at 16k particles on 2 threads gave 1.81e7
+ * particle-steps/s against libgomp's 2.20e7, best of three each; libgomp's threads poll for
+ * milliseconds), short enough that idle workers sleep
+ * between frames and when the governor runs one thread. A run of more threads than the process
+ * has cores polls SM_TEAM_SPIN_OVER times only: a poller holds the core that the thread it waits
+ * for needs (3 threads on 2 cores, 4 barriers a run: 530 us a run with 4,096 polls, 16 us with
+ * 16; libgomp 57 us). */
+#define SM_TEAM_SPIN 16384
+#define SM_TEAM_SPIN_OVER 16
+#define SM_TEAM_YIELDS 16
+
+#define QUIT_T 0u /* a dispatch word's T that ends the workers */
+
+typedef struct sm_pool sm_pool;
+
+typedef struct worker {
+    sm_pool *pool;
+    int index;      /* the worker's thread number in a run: 1 .. */
+    uint64_t start; /* the dispatch word when it was made */
+    pthread_t tid;
+} worker;
+
+struct sm_pool {
+    _Alignas(64) _Atomic uint64_t dispatch; /* run number << 32 | T */
+    _Alignas(64) _Atomic unsigned arrived;  /* threads in the barrier */
+    _Alignas(64) _Atomic uint64_t barrier_gen;
+    _Alignas(64) _Atomic int sleepers;
+    sm_team_fn fn; /* the current run's, written before its dispatch word */
+    void *arg;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    int nworkers;
+    worker **workers;
+};
+
+static _Thread_local sm_pool *tl_pool; /* the pool this thread owns */
+static _Thread_local sm_pool *tl_run;  /* the pool of the run this thread is in */
+static _Thread_local int tl_T = 1;     /* that run's thread count (1: none) */
+static _Thread_local int tl_depth;     /* runs this thread is inside */
+static _Thread_local int tl_spin = SM_TEAM_SPIN; /* polls before yielding, for this run */
+
+static pthread_once_t once = PTHREAD_ONCE_INIT;
+static pthread_key_t pool_key;
+static int cores = 1; /* the cores this process may run on (its affinity mask) */
+
+static uint64_t wait_change(sm_pool *p, _Atomic uint64_t *word, uint64_t old) {
+    for (int i = 0; i < tl_spin; i++) {
+        const uint64_t v = atomic_load_explicit(word, memory_order_acquire);
+        if (v != old) return v;
+        CPU_RELAX();
+    }
+    for (int i = 0; i < SM_TEAM_YIELDS; i++) {
+        const uint64_t v = atomic_load_explicit(word, memory_order_acquire);
+        if (v != old) return v;
+        sched_yield();
+    }
+    atomic_fetch_add(&p->sleepers, 1);
+    pthread_mutex_lock(&p->mu);
+    uint64_t v;
+    while ((v = atomic_load(word)) == old) pthread_cond_wait(&p->cv, &p->mu);
+    pthread_mutex_unlock(&p->mu);
+    atomic_fetch_sub(&p->sleepers, 1);
+    return v;
+}
+
+static void publish(sm_pool *p, _Atomic uint64_t *word, uint64_t v) {
+    atomic_store(word, v);
+    if (atomic_load(&p->sleepers) > 0) {
+        pthread_mutex_lock(&p->mu);
+        pthread_cond_broadcast(&p->cv);
+        pthread_mutex_unlock(&p->mu);
+    }
+}
+
+void sm_team_barrier(void) {
+    if (tl_T <= 1) return;
+    sm_pool *p = tl_run;
+    /* The generation cannot advance before this thread arrives. */
+    const uint64_t g = atomic_load_explicit(&p->barrier_gen, memory_order_acquire);
+    if (atomic_fetch_add_explicit(&p->arrived, 1, memory_order_acq_rel) == (unsigned)tl_T - 1) {
+        atomic_store_explicit(&p->arrived, 0, memory_order_relaxed);
+        publish(p, &p->barrier_gen, g + 1);
+    } else {
+        wait_change(p, &p->barrier_gen, g);
+    }
+}
+
+static void run_as(sm_pool *p, int t, int T) {
+    tl_spin = T > cores ? SM_TEAM_SPIN_OVER : SM_TEAM_SPIN; /* also for the wait for the next run */
+    tl_run = p;
+    tl_T = T;
+    tl_depth++;
+    p->fn(p->arg, t, T);
+    sm_team_barrier();
+    tl_depth--;
+    tl_T = 1;
+    tl_run = NULL;
+}
+
+static void *worker_main(void *arg) {
+    const worker *wk = arg;
+    sm_pool *p = wk->pool;
+    uint64_t seen = wk->start;
+    for (;;) {
+        seen = wait_change(p, &p->dispatch, seen);
+        const unsigned T = (unsigned)(seen & 0xffffffffu);
+        if (T == QUIT_T) return NULL;
+        if (wk->index < (int)T) run_as(p, wk->index, (int)T);
+    }
+}
+
+/* Ends a pool's workers and frees it (its owner thread is ending, or the pool is incomplete). */
+static void pool_free(void *v) {
+    sm_pool *p = v;
+    if (!p) return;
+    const uint64_t d = atomic_load(&p->dispatch);
+    publish(p, &p->dispatch, (((d >> 32) + 1) << 32) | QUIT_T);
+    for (int i = 0; i < p->nworkers; i++) {
+        pthread_join(p->workers[i]->tid, NULL);
+        free(p->workers[i]);
+    }
+    free(p->workers);
+    pthread_cond_destroy(&p->cv);
+    pthread_mutex_destroy(&p->mu);
+    free(p);
+}
+
+/* In a child of fork() only the forking thread exists: its pool's workers are gone. */
+static void forget_pool_in_child(void) {
+    tl_pool = NULL;
+    pthread_setspecific(pool_key, NULL);
+}
+
+static void init_once(void) {
+    cpu_set_t set;
+    if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0) cores = CPU_COUNT(&set);
+    pthread_key_create(&pool_key, pool_free);
+    pthread_atfork(NULL, NULL, forget_pool_in_child);
+}
+
+/* Adds one worker; 0 when the thread cannot be made. Workers block every signal: handlers run
+ * on the threads that the program made. */
+static int add_worker(sm_pool *p) {
+    worker **list = realloc(p->workers, (size_t)(p->nworkers + 1) * sizeof *list);
+    if (!list) return 0;
+    p->workers = list;
+    worker *wk = malloc(sizeof *wk);
+    if (!wk) return 0;
+    wk->pool = p;
+    wk->index = p->nworkers + 1;
+    wk->start = atomic_load(&p->dispatch);
+    sigset_t all, old;
+    sigfillset(&all);
+    pthread_sigmask(SIG_SETMASK, &all, &old);
+    const int err = pthread_create(&wk->tid, NULL, worker_main, wk);
+    pthread_sigmask(SIG_SETMASK, &old, NULL);
+    if (err != 0) {
+        free(wk);
+        return 0;
+    }
+    list[p->nworkers++] = wk;
+    return 1;
+}
+
+/* This thread's pool with at least `need` workers if they can be made (NULL: no pool). */
+static sm_pool *pool_get(int need) {
+    pthread_once(&once, init_once);
+    sm_pool *p = tl_pool;
+    if (!p) {
+        p = calloc(1, sizeof *p);
+        if (!p) return NULL;
+        if (pthread_mutex_init(&p->mu, NULL) != 0) {
+            free(p);
+            return NULL;
+        }
+        if (pthread_cond_init(&p->cv, NULL) != 0) {
+            pthread_mutex_destroy(&p->mu);
+            free(p);
+            return NULL;
+        }
+        tl_pool = p;
+        pthread_setspecific(pool_key, p);
+    }
+    while (p->nworkers < need && add_worker(p)) {
+    }
+    return p;
+}
+
+void sm_team_run(int T, sm_team_fn fn, void *arg) {
+    sm_pool *p = (T > 1 && tl_depth == 0) ? pool_get(T - 1) : NULL;
+    if (p && T > p->nworkers + 1) T = p->nworkers + 1;
+    if (!p || T <= 1) {
+        const int saved = tl_T;
+        tl_T = 1;
+        tl_depth++;
+        fn(arg, 0, 1);
+        tl_depth--;
+        tl_T = saved;
+        return;
+    }
+    p->fn = fn;
+    p->arg = arg;
+    const uint64_t d = atomic_load(&p->dispatch);
+    publish(p, &p->dispatch, (((d >> 32) + 1) << 32) | (uint64_t)T);
+    run_as(p, 0, T);
+}
+
+typedef struct team_for {
+    sm_team_range_fn fn;
+    void *arg;
+    long n;
+} team_for;
+
+static void team_for_share(void *arg, int t, int T) {
+    const team_for *f = arg;
+    long lo, hi;
+    sm_team_split(f->n, T, t, &lo, &hi);
+    if (lo < hi) f->fn(f->arg, lo, hi);
+}
+
+void sm_team_for(int T, long n, sm_team_range_fn fn, void *arg) {
+    if (n <= 0) return;
+    team_for f = {fn, arg, n};
+    sm_team_run(T > n ? (int)n : T, team_for_share, &f);
+}

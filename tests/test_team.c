@@ -1,0 +1,223 @@
+/* The step's thread team (src/core/team.h): every thread number runs once per run, the barrier
+ * separates phases, loops cover their items once, runs nest, and the pool survives its workers
+ * sleeping, its owner thread ending and a fork. */
+#define _POSIX_C_SOURCE 200809L /* fork, nanosleep, waitpid */
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "core/team.h"
+#include "test_util.h"
+
+#define MAXT 8
+
+typedef struct calls {
+    atomic_int count[MAXT];
+    atomic_int bad_T, not_caller;
+    int T;
+    pthread_t caller;
+} calls;
+
+static void count_calls(void *arg, int t, int T) {
+    calls *c = arg;
+    if (T != c->T) atomic_store(&c->bad_T, 1);
+    if (t == 0 && !pthread_equal(pthread_self(), c->caller)) atomic_store(&c->not_caller, 1);
+    if (t >= 0 && t < MAXT) atomic_fetch_add(&c->count[t], 1);
+}
+
+static void test_each_thread_once(void) {
+    for (int T = 1; T <= 5; T++) {
+        calls c = {.T = T, .caller = pthread_self()};
+        sm_team_run(T, count_calls, &c);
+        for (int t = 0; t < MAXT; t++) CHECK(atomic_load(&c.count[t]) == (t < T ? 1 : 0));
+        CHECK(atomic_load(&c.bad_T) == 0);
+        CHECK(atomic_load(&c.not_caller) == 0);
+    }
+}
+
+/* Each thread writes its phase number (plain stores), waits, reads every other's, waits again. */
+typedef struct phases {
+    int slot[MAXT];
+    atomic_int mismatches;
+    int rounds;
+} phases;
+
+static void phase_work(void *arg, int t, int T) {
+    phases *ph = arg;
+    for (int k = 1; k <= ph->rounds; k++) {
+        ph->slot[t] = k;
+        sm_team_barrier();
+        for (int u = 0; u < T; u++)
+            if (ph->slot[u] != k) atomic_fetch_add(&ph->mismatches, 1);
+        sm_team_barrier();
+    }
+}
+
+static void test_barrier_phases(void) {
+    for (int T = 2; T <= 4; T++) {
+        phases ph = {.rounds = 2000};
+        sm_team_run(T, phase_work, &ph);
+        CHECK(atomic_load(&ph.mismatches) == 0);
+        for (int t = 0; t < T; t++) CHECK(ph.slot[t] == ph.rounds);
+    }
+}
+
+typedef struct cover {
+    atomic_int hits[1000];
+    atomic_int bad_range;
+    long n;
+} cover;
+
+static void cover_range(void *arg, long lo, long hi) {
+    cover *cv = arg;
+    if (lo < 0 || hi > cv->n || lo >= hi) atomic_store(&cv->bad_range, 1);
+    for (long i = lo; i < hi && i < cv->n; i++) atomic_fetch_add(&cv->hits[i], 1);
+}
+
+static void test_for_covers_once(void) {
+    const long ns[] = {0, 1, 3, 7, 1000};
+    const int Ts[] = {1, 2, 3, 8};
+    for (int a = 0; a < 5; a++)
+        for (int b = 0; b < 4; b++) {
+            cover *cv = calloc(1, sizeof *cv);
+            cv->n = ns[a];
+            sm_team_for(Ts[b], cv->n, cover_range, cv);
+            int once = 1;
+            for (long i = 0; i < cv->n; i++) once &= atomic_load(&cv->hits[i]) == 1;
+            CHECK(once);
+            CHECK(atomic_load(&cv->bad_range) == 0);
+            free(cv);
+        }
+    /* The split: contiguous, in thread order, sizes differing by at most one. */
+    for (int T = 1; T <= 5; T++) {
+        long prev = 0;
+        for (int t = 0; t < T; t++) {
+            long lo, hi;
+            sm_team_split(11, T, t, &lo, &hi);
+            CHECK(lo == prev);
+            CHECK(hi - lo == 11 / T || hi - lo == 11 / T + 1);
+            prev = hi;
+        }
+        CHECK(prev == 11);
+    }
+}
+
+/* A run inside a run is done by the thread that asks, alone. */
+typedef struct nest {
+    atomic_int inner_calls, inner_bad;
+} nest;
+
+static void inner(void *arg, int t, int T) {
+    nest *ns = arg;
+    if (t != 0 || T != 1) atomic_store(&ns->inner_bad, 1);
+    atomic_fetch_add(&ns->inner_calls, 1);
+}
+
+static void outer(void *arg, int t, int T) {
+    (void)t;
+    (void)T;
+    sm_team_run(3, inner, arg);
+    sm_team_barrier();
+}
+
+static void test_nested(void) {
+    nest ns = {0};
+    sm_team_run(2, outer, &ns);
+    CHECK(atomic_load(&ns.inner_calls) == 2);
+    CHECK(atomic_load(&ns.inner_bad) == 0);
+}
+
+typedef struct maxes {
+    _Atomic double m;
+} maxes;
+
+static void max_work(void *arg, int t, int T) {
+    maxes *mx = arg;
+    for (int k = 0; k < 1000; k++) sm_team_max(&mx->m, (double)(k * T + t));
+}
+
+static void test_max(void) {
+    maxes mx = {0};
+    sm_team_run(3, max_work, &mx);
+    CHECK(atomic_load(&mx.m) == 999.0 * 3 + 2);
+}
+
+/* Runs after the workers have fallen asleep (they poll for about 0.35 ms). */
+static void test_after_sleep(void) {
+    for (int k = 0; k < 5; k++) {
+        struct timespec ts = {0, 5 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+        calls c = {.T = 2, .caller = pthread_self()};
+        sm_team_run(2, count_calls, &c);
+        CHECK(atomic_load(&c.count[0]) == 1 && atomic_load(&c.count[1]) == 1);
+    }
+}
+
+/* A thread with its own pool ends: the pool's workers end with it (pthread_join would hang
+ * otherwise, and ctest's timeout fail the test). */
+static void *own_pool(void *arg) {
+    int *ok = arg;
+    phases ph = {.rounds = 50};
+    sm_team_run(3, phase_work, &ph);
+    *ok = atomic_load(&ph.mismatches) == 0 && ph.slot[2] == 50;
+    return NULL;
+}
+
+static void test_thread_pools(void) {
+    for (int k = 0; k < 10; k++) {
+        pthread_t th;
+        int ok = 0;
+        CHECK(pthread_create(&th, NULL, own_pool, &ok) == 0);
+        CHECK(pthread_join(th, NULL) == 0);
+        CHECK(ok);
+    }
+}
+
+/* After fork() the child has no workers: its first run makes a new pool. */
+static void test_fork(void) {
+    calls c0 = {.T = 2, .caller = pthread_self()};
+    sm_team_run(2, count_calls, &c0); /* the parent's pool exists */
+    fflush(NULL);
+    pid_t pid = fork();
+    if (pid == 0) {
+        phases ph = {.rounds = 100};
+        sm_team_run(2, phase_work, &ph);
+        _exit(atomic_load(&ph.mismatches) == 0 && ph.slot[1] == 100 ? 0 : 1);
+    }
+    CHECK(pid > 0);
+    int status = -1;
+    CHECK(waitpid(pid, &status, 0) == pid);
+    CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
+
+/* Many short runs with barriers, also with more threads than cores (workers then sleep and are
+ * woken often). */
+static void test_many_runs(void) {
+    for (int T = 2; T <= 3; T++) {
+        phases ph = {.rounds = 2};
+        int bad = 0;
+        for (int k = 0; k < 20000; k++) {
+            sm_team_run(T, phase_work, &ph);
+            bad += ph.slot[T - 1] != 2;
+            ph.slot[T - 1] = 0;
+        }
+        CHECK(bad == 0);
+        CHECK(atomic_load(&ph.mismatches) == 0);
+    }
+}
+
+int main(void) {
+    test_each_thread_once();
+    test_barrier_phases();
+    test_for_covers_once();
+    test_nested();
+    test_max();
+    test_after_sleep();
+    test_thread_pools();
+    test_fork();
+    test_many_runs();
+    return sm_test_summary("test_team");
+}

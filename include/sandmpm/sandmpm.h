@@ -175,11 +175,15 @@ typedef struct sm_world_def {
                                   inverse of the symmetric part of the Newton system's d x d diagonal block, on
                                   the right: the same residual is minimised). Measured: 9-20% fewer GMRES
                                   iterations on some scenes, 15% more on others (docs/benchmarks.md). */
-    int threads;             /**< OpenMP threads. 0 (default): chosen per step by the library between one
-                                  thread and OpenMP's default, whichever steps faster on this machine
-                                  now (small scenes, a machine shared with busy processes); it times
-                                  the steps and probes the other choice now and then. Results do not
-                                  depend on it. */
+    int threads;             /**< threads of a step. 0 (default): chosen per step by the library between one
+                                  thread and OpenMP's default count (omp_get_max_threads: the cores, or
+                                  OMP_NUM_THREADS), whichever steps faster on this machine now (small
+                                  scenes, a machine shared with busy processes); it times the steps and
+                                  probes the other choice now and then. Results do not depend on it.
+                                  The step runs on a pool of worker threads that belongs to the thread
+                                  calling the library (made on its first step of more than one thread,
+                                  ended when that thread ends; the workers block signals and sleep
+                                  about 0.35 ms after their last work). */
     size_t max_particles;    /**< refuse to grow beyond this many particles; 0 = no limit. */
     double contact_gap;      /**< the contact gate, in cells (dx): a separating collider (and separating domain
                                   walls) acts on a grid node only if a particle whose stencil holds the node
@@ -217,7 +221,7 @@ SM_API void sm_world_destroy(sm_world *w);
 /** The message of the last failed call on this world ("" if none). */
 SM_API const char *sm_world_errmsg(const sm_world *w);
 
-/** Changes the number of threads used by later steps (0 = OpenMP's default). */
+/** Changes the number of threads used by later steps (0: the library chooses, as sm_world_def.threads). */
 SM_API void sm_world_set_threads(sm_world *w, int threads);
 
 /** The definition the world was created with (domain rounded to whole cells). */

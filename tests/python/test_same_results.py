@@ -60,3 +60,27 @@ def test_thread_count_does_not_change_the_bits(pyref):
         w.set_threads(2)
         step_adaptive(w, 10)
         assert hexhash(w) == ref["step 20"]
+
+
+def test_worlds_stepped_from_two_python_threads_match_c_bitwise(pyref):
+    """Each calling thread has its own pool of step threads (src/core/team.h): two Python threads,
+    each stepping its own world on 2 threads, both reach the C reference; their pools end with them."""
+    import threading
+
+    ref = pyref("column3")
+    results = {}
+
+    def run(name):
+        with column(3, 0.04) as w:
+            w.set_threads(2)
+            step_adaptive(w, 20)
+            results[name] = hexhash(w)
+
+    for _round in range(3):
+        threads = [threading.Thread(target=run, args=(k,)) for k in range(2)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        assert results == {0: ref["step 20"], 1: ref["step 20"]}
+        results.clear()

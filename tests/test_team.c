@@ -105,6 +105,59 @@ static void test_for_covers_once(void) {
     }
 }
 
+/* Claims: every item once, in chunks of at least min_chunk (but the last), thread 0's from the
+ * front upward and thread 1's from the back downward when there are 2; with a thread that sleeps
+ * first, the other takes the rest. */
+typedef struct claim_run {
+    sm_team_claims cl;
+    atomic_int hits[1000];
+    atomic_int order_bad, chunk_bad, count[MAXT];
+    long min_chunk;
+    int slow_thread; /* sleeps 20 ms before claiming (-1: none) */
+} claim_run;
+
+static void claim_work(void *arg, int t, int T) {
+    claim_run *cr = arg;
+    if (t == cr->slow_thread) {
+        struct timespec ts = {0, 20 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+    }
+    sm_team_claimer c;
+    sm_team_claimer_init(&c, &cr->cl, t, T);
+    long lo, hi, prev_lo = -1, prev_hi = -1;
+    while (sm_team_claim(&c, cr->min_chunk, &lo, &hi)) {
+        if (!(lo < hi && lo >= 0 && hi <= cr->cl.n)) atomic_store(&cr->chunk_bad, 1);
+        if (T == 2 && prev_lo >= 0 && (t == 0 ? lo != prev_hi : hi != prev_lo)) atomic_store(&cr->order_bad, 1);
+        for (long i = lo; i < hi; i++) atomic_fetch_add(&cr->hits[i], 1);
+        atomic_fetch_add(&cr->count[t], (int)(hi - lo));
+        prev_lo = lo;
+        prev_hi = hi;
+    }
+}
+
+static void test_claims(void) {
+    const long ns[] = {0, 1, 2, 9, 1000};
+    for (int a = 0; a < 5; a++)
+        for (int T = 1; T <= 3; T++)
+            for (int slow = -1; slow < (ns[a] == 1000 ? 2 : 0); slow++) {
+                claim_run *cr = calloc(1, sizeof *cr);
+                sm_team_claims_init(&cr->cl, ns[a]);
+                cr->min_chunk = 3;
+                cr->slow_thread = slow < T ? slow : -1;
+                sm_team_run(T, claim_work, cr);
+                int once = 1, total = 0;
+                for (long i = 0; i < ns[a]; i++) once &= atomic_load(&cr->hits[i]) == 1;
+                for (int t = 0; t < MAXT; t++) total += atomic_load(&cr->count[t]);
+                CHECK(once);
+                CHECK(total == ns[a]);
+                CHECK(atomic_load(&cr->chunk_bad) == 0);
+                CHECK(atomic_load(&cr->order_bad) == 0);
+                /* 2 threads, one asleep for 20 ms: the other has taken nearly everything. */
+                if (T == 2 && cr->slow_thread >= 0) CHECK(atomic_load(&cr->count[1 - cr->slow_thread]) >= 900);
+                free(cr);
+            }
+}
+
 /* A run inside a run is done by the thread that asks, alone. */
 typedef struct nest {
     atomic_int inner_calls, inner_bad;
@@ -213,6 +266,7 @@ int main(void) {
     test_each_thread_once();
     test_barrier_phases();
     test_for_covers_once();
+    test_claims();
     test_nested();
     test_max();
     test_after_sleep();

@@ -257,3 +257,46 @@ void sm_team_for(int T, long n, sm_team_range_fn fn, void *arg) {
     team_for f = {fn, arg, n};
     sm_team_run(T > n ? (int)n : T, team_for_share, &f);
 }
+
+void sm_team_claims_init(sm_team_claims *cl, long n) {
+    cl->n = n;
+    atomic_init(&cl->ends, (unsigned long long)n << 32);
+}
+
+void sm_team_claimer_init(sm_team_claimer *c, sm_team_claims *cl, int t, int T) {
+    c->cl = cl;
+    c->t = t;
+    c->T = T;
+    sm_team_split(cl->n, T, t, &c->next, &c->end);
+}
+
+static long chunk_of(long left, long min_chunk) {
+    const long k = left / 4;
+    return k > min_chunk ? k : min_chunk;
+}
+
+int sm_team_claim(sm_team_claimer *c, long min_chunk, long *lo, long *hi) {
+    if (c->T != 2) {
+        if (c->next >= c->end) return 0;
+        *lo = c->next;
+        *hi = c->next + chunk_of(c->end - c->next, min_chunk);
+        if (*hi > c->end) *hi = c->end;
+        c->next = *hi;
+        return 1;
+    }
+    unsigned long long e = atomic_load_explicit(&c->cl->ends, memory_order_relaxed);
+    for (;;) {
+        const long front = (long)(e & 0xffffffffu), back = (long)(e >> 32);
+        if (front >= back) return 0;
+        const long k = chunk_of(back - front, min_chunk);
+        long nf = front, nb = back;
+        if (c->t == 0) nf = front + k < back ? front + k : back;
+        else nb = back - k > front ? back - k : front;
+        const unsigned long long ne = (unsigned long long)nf | (unsigned long long)nb << 32;
+        if (atomic_compare_exchange_weak_explicit(&c->cl->ends, &e, ne, memory_order_relaxed, memory_order_relaxed)) {
+            *lo = c->t == 0 ? front : nb;
+            *hi = c->t == 0 ? nf : back;
+            return 1;
+        }
+    }
+}

@@ -45,6 +45,32 @@ static inline void sm_team_max(_Atomic double *m, double v) {
     }
 }
 
+/* Items [0, n) that the threads of a run take in chunks, for stages whose items are independent
+ * (their results do not depend on which thread does which). With 2 threads, thread 0 takes from
+ * the front and thread 1 from the back until they meet: each keeps to its end, as with the static
+ * split (its data stays in its cache), but a thread that the machine slows down leaves the rest to
+ * the other. A chunk is a quarter of what is left (at least `min_chunk` items). With another
+ * thread count, each thread takes its static share (sm_team_split) in such chunks. */
+typedef struct sm_team_claims {
+    _Atomic unsigned long long ends; /* 2 threads: front | back << 32 */
+    long n;
+} sm_team_claims;
+
+/* Before the run (n < 2^32). */
+void sm_team_claims_init(sm_team_claims *cl, long n);
+
+/* A thread's cursor on the claims. */
+typedef struct sm_team_claimer {
+    sm_team_claims *cl;
+    int t, T;
+    long next, end; /* other thread counts: what is left of the static share */
+} sm_team_claimer;
+
+void sm_team_claimer_init(sm_team_claimer *c, sm_team_claims *cl, int t, int T);
+
+/* The next chunk [*lo, *hi) for this thread; 0 when none is left. */
+int sm_team_claim(sm_team_claimer *c, long min_chunk, long *lo, long *hi);
+
 /* The contiguous share [lo, hi) of n items of thread t of T: OpenMP's schedule(static) split
  * (the first n % T threads take one more). */
 static inline void sm_team_split(long n, int T, int t, long *lo, long *hi) {

@@ -12,8 +12,9 @@
  *
  * Per particle block: gather the 2^d grid blocks into the thread's cache (lanes 0..d-1:
  * v-tilde, or v-tilde - r v^n for FLIP; lanes d..2d-1: v-bar), then interpolate each particle
- * from it with the separable weights. Threads take contiguous block ranges of equal particle
- * counts (the same particles as in P2G). */
+ * from it with the separable weights. The threads claim blocks from the two ends of the list
+ * (core/team.h, sm_team_claim): about the particles each had in P2G; every block's results are
+ * its own, so which thread does it changes no bit. */
 #include "core/dim.h"
 
 #include <string.h>
@@ -260,48 +261,61 @@ static inline __attribute__((always_inline)) void g2p_block(const sm_g2p_io *io,
 typedef struct g2p_job {
     const sm_g2p_io *io;
     const sm_step_ctx *c;
+    sm_team_claims blocks; /* the particle blocks (core/team.h: the threads meet where the work does) */
     atomic_ullong clamped, projected, bad;
     _Atomic double vmax2;
 } g2p_job;
 
 /* Thread t's share of the particle blocks (equal particle counts, as in P2G). */
+/* What a thread's blocks measured. */
+typedef struct g2p_tally {
+    unsigned long long clamped, projected, bad;
+    double vmax2;
+} g2p_tally;
+
+/* Particle block pb: its particles' G2P, then the safety projection. */
+static void g2p_pblock(const sm_g2p_io *io, const sm_step_ctx *c, const sm_pblock *pb, vec *restrict cache,
+                       g2p_tally *tally) {
+    g2p_gather(io, c, pb, cache);
+    g2p_acc acc;
+    for (int a = 0; a < D; a++) {
+        acc.lo[a] = INFINITY;
+        acc.hi[a] = -INFINITY;
+    }
+    acc.vmax2 = acc.nan = 0;
+    acc.clamped = 0;
+    if (c->stencil == 3) g2p_block(io, c, 3, pb, cache, &acc);
+    else g2p_block(io, c, 4, pb, cache, &acc);
+    tally->clamped += acc.clamped;
+    if (acc.nan != 0 || acc.nan != acc.nan) tally->bad++;
+    else if (io->particle_projection && io->ncolliders > 0) tally->projected += project_block(io, pb, &acc);
+    if ((double)acc.vmax2 > tally->vmax2) tally->vmax2 = (double)acc.vmax2;
+}
+
+/* Thread t's particle blocks: claimed from its end of the list (sm_team_claim). */
 static void g2p_share(void *arg, int t, int T) {
     g2p_job *job = arg;
     const sm_g2p_io *io = job->io;
-    const sm_step_ctx *c = job->c;
-    const int S = c->stencil;
     const sm_bins *bins = io->bins;
     vec *cache = (vec *)io->cache + (size_t)t * NCACHE;
-    unsigned long long clamped = 0, projected = 0, bad = 0;
-    double vmax2 = 0;
-    long blo, bhi;
-    sm_bins_range(bins, NULL, 0, (long)bins->npb, T, t, &blo, &bhi);
-    for (long b = blo; b < bhi; b++) {
-        const sm_pblock *pb = &bins->pb[b];
-        if (bins->perm[pb->start] >= io->owned) continue; /* a ghost block */
-        g2p_gather(io, c, pb, cache);
-        g2p_acc acc;
-        for (int a = 0; a < D; a++) {
-            acc.lo[a] = INFINITY;
-            acc.hi[a] = -INFINITY;
+    g2p_tally tally = {0, 0, 0, 0};
+    sm_team_claimer claimer;
+    sm_team_claimer_init(&claimer, &job->blocks, t, T);
+    long lo, hi;
+    while (sm_team_claim(&claimer, 1, &lo, &hi))
+        for (long b = lo; b < hi; b++) {
+            const sm_pblock *pb = &bins->pb[b];
+            if (bins->perm[pb->start] < io->owned) g2p_pblock(io, job->c, pb, cache, &tally); /* else a ghost block */
         }
-        acc.vmax2 = acc.nan = 0;
-        acc.clamped = 0;
-        if (S == 3) g2p_block(io, c, 3, pb, cache, &acc);
-        else g2p_block(io, c, 4, pb, cache, &acc);
-        clamped += acc.clamped;
-        if (acc.nan != 0 || acc.nan != acc.nan) bad++;
-        else if (io->particle_projection && io->ncolliders > 0) projected += project_block(io, pb, &acc);
-        if ((double)acc.vmax2 > vmax2) vmax2 = (double)acc.vmax2;
-    }
-    atomic_fetch_add_explicit(&job->clamped, clamped, memory_order_relaxed);
-    atomic_fetch_add_explicit(&job->projected, projected, memory_order_relaxed);
-    atomic_fetch_add_explicit(&job->bad, bad, memory_order_relaxed);
-    sm_team_max(&job->vmax2, vmax2);
+    atomic_fetch_add_explicit(&job->clamped, tally.clamped, memory_order_relaxed);
+    atomic_fetch_add_explicit(&job->projected, tally.projected, memory_order_relaxed);
+    atomic_fetch_add_explicit(&job->bad, tally.bad, memory_order_relaxed);
+    sm_team_max(&job->vmax2, tally.vmax2);
 }
 
 void SM_FN(sm_g2p)(const sm_g2p_io *io, const sm_step_ctx *c, sm_g2p_stats *st) {
-    g2p_job job = {io, c, 0, 0, 0, 0};
+    g2p_job job = {.io = io, .c = c};
+    sm_team_claims_init(&job.blocks, (long)io->bins->npb);
     sm_team_run(c->threads, g2p_share, &job);
     st->clamped = atomic_load(&job.clamped);
     st->projected = atomic_load(&job.projected);

@@ -8,9 +8,9 @@
  *   f_i = -sum_p V0_p P_p F_p^T grad w_ip = -sum_p V0_p tau_p grad w_ip          (3.91)
  * with tau the Kirchhoff stress the previous step's plasticity stored.
  *
- * Race-free and deterministic (bin.h): colours one after another, the blocks of a colour split
- * among the threads in contiguous ranges of equal particle counts, the particles of a block in
- * order, each block accumulated into the thread's dense cache and then added into the grid.
+ * Race-free and deterministic (bin.h): colours one after another, the blocks of a colour claimed
+ * by the threads from the two ends of its list (core/team.h), the particles of a block in order,
+ * each block accumulated into the thread's dense cache and then added into the grid.
  * A list of blocks (sm_p2g_io.lists) scatters only those, and a block may send some of its grid
  * blocks' sums to side arrays: a distributed step scatters its inner blocks while the exchange's
  * messages travel, then the others (dist/overlap.c says why every node still sums in colour
@@ -144,34 +144,41 @@ static inline __attribute__((always_inline)) void p2g_block(const sm_p2g_io *io,
 typedef struct p2g_job {
     const sm_p2g_io *io;
     const sm_step_ctx *c;
+    const uint32_t *list, *offset; /* the blocks by colour */
+    sm_team_claims colour[NCOLORS]; /* each colour's blocks (core/team.h: the threads meet where the work does) */
 } p2g_job;
 
-/* Thread t's share of each colour's blocks, the colours one after another. */
+/* Thread t's blocks of each colour, the colours one after another. Within a colour no two blocks
+ * reach a node, so which thread does a block changes no bit: the threads claim them from the two
+ * ends of the colour's list (sm_team_claim). */
 static void p2g_share(void *arg, int t, int T) {
-    const p2g_job *job = arg;
+    p2g_job *job = arg;
     const sm_p2g_io *io = job->io;
-    const sm_step_ctx *c = job->c;
-    const int S = c->stencil;
-    const sm_bins *bins = io->bins;
-    const uint32_t *list = io->lists ? io->lists->blocks : bins->color_blocks;
-    const uint32_t *offset = io->lists ? io->lists->offset : bins->color_offset;
+    const uint32_t *list = job->list, *offset = job->offset;
     vec *cache = (vec *)io->cache + (size_t)t * NCACHE;
     int last = -1; /* the last colour with blocks: the run's end is its barrier */
     for (int col = 0; col < NCOLORS; col++)
         if (offset[col] != offset[col + 1]) last = col;
     for (int col = 0; col <= last; col++) {
         if (offset[col] == offset[col + 1]) continue; /* the same on every thread: no barrier needed */
+        sm_team_claimer claimer;
+        sm_team_claimer_init(&claimer, &job->colour[col], t, T);
         long lo, hi;
-        sm_bins_range(bins, list, (long)offset[col], (long)offset[col + 1], T, t, &lo, &hi);
-        if (S == 3)
-            for (long k = lo; k < hi; k++) p2g_block(io, c, 3, list[k], cache);
-        else
-            for (long k = lo; k < hi; k++) p2g_block(io, c, 4, list[k], cache);
+        while (sm_team_claim(&claimer, 1, &lo, &hi)) {
+            const uint32_t *blocks = list + offset[col];
+            if (job->c->stencil == 3)
+                for (long k = lo; k < hi; k++) p2g_block(io, job->c, 3, blocks[k], cache);
+            else
+                for (long k = lo; k < hi; k++) p2g_block(io, job->c, 4, blocks[k], cache);
+        }
         if (col < last) sm_team_barrier();
     }
 }
 
 void SM_FN(sm_p2g)(const sm_p2g_io *io, const sm_step_ctx *c) {
-    p2g_job job = {io, c};
+    p2g_job job = {.io = io, .c = c};
+    job.list = io->lists ? io->lists->blocks : io->bins->color_blocks;
+    job.offset = io->lists ? io->lists->offset : io->bins->color_offset;
+    for (int col = 0; col < NCOLORS; col++) sm_team_claims_init(&job.colour[col], (long)(job.offset[col + 1] - job.offset[col]));
     sm_team_run(c->threads, p2g_share, &job);
 }

@@ -29,24 +29,3 @@ sm_status sm_bins_reserve_perm(sm_bins *b, size_t cap) {
     return SM_OK;
 }
 
-static inline size_t block_particles(const sm_bins *b, const uint32_t *list, long i) {
-    const sm_pblock *pb = &b->pb[list ? list[i] : (uint32_t)i];
-    return pb->end - pb->start;
-}
-
-void sm_bins_range(const sm_bins *b, const uint32_t *list, long first, long last, int T, int t, long *lo, long *hi) {
-    size_t total = 0;
-    for (long i = first; i < last; i++) total += block_particles(b, list, i);
-    /* s_k = first block i with (particles in first..i-1) >= total k / T; s_T = last. */
-    const size_t want0 = total * (size_t)t / (size_t)T, want1 = total * (size_t)(t + 1) / (size_t)T;
-    size_t cum = 0;
-    long i = first;
-    while (i < last && cum < want0) cum += block_particles(b, list, i++);
-    *lo = i;
-    if (t == T - 1) {
-        *hi = last;
-        return;
-    }
-    while (i < last && cum < want1) cum += block_particles(b, list, i++);
-    *hi = i;
-}

@@ -74,15 +74,6 @@ size_t sm_bins_bytes(const sm_bins *b);
 /* Room in perm for cap particles (the particle storage's capacity). */
 sm_status sm_bins_reserve_perm(sm_bins *b, size_t cap);
 
-/* Blocks first..last-1 of `list` (NULL: block indices first..last-1) in T contiguous ranges of
- * about equal particle counts; range t is [*lo, *hi). The implicit solve's particle passes split
- * this way. P2G, G2P and plasticity claim blocks from the two ends of their lists instead
- * (core/team.h, sm_team_claim): with 2 threads each keeps to its end, so a thread still works on
- * about the same particles in every stage (blocks and storage are both in key order); with
- * dynamic scheduling, the cross-core traffic had halved the 2-thread speed whenever the two cores
- * did not share a cache. */
-void sm_bins_range(const sm_bins *b, const uint32_t *list, long first, long last, int T, int t, long *lo, long *hi);
-
 #ifdef SM_DIM
 /* Bins the particles by block: fills perm, the particle blocks, their colour lists, the live grid
  * blocks (zeroed for P2G: sm_grid_zero) and every block's grid slots; reorders the particle

@@ -194,33 +194,39 @@ static inline __attribute__((always_inline)) void pass_block(const sm_implicit_s
 typedef void (*block_fn)(const sm_implicit_sys *s, const sm_pblock *pb, int th, void *arg);
 
 /* fn for every particle block this rank needs, colour by colour (no two threads reach a node at
- * once; the same order per node for any thread count), the blocks of a colour split among the
- * threads in contiguous ranges of equal particle counts (sm_bins_range). */
+ * once; the same order per node for any thread count), the blocks of a colour claimed by the
+ * threads from the two ends of its list (core/team.h, sm_team_claim): which thread does a block
+ * changes no bit. */
 typedef struct sweep_job {
     const sm_implicit_sys *s;
     block_fn fn;
     void *arg;
+    sm_team_claims colour[NCOLORS];
 } sweep_job;
 
 static void sweep_share(void *arg, int th, int nt) {
-    const sweep_job *job = arg;
+    sweep_job *job = arg;
     const sm_implicit_sys *s = job->s;
     const sm_bins *bins = s->bins;
     for (int col = 0; col < NCOLORS; col++) {
         if (bins->color_offset[col] == bins->color_offset[col + 1]) continue; /* the same on every thread */
+        const uint32_t *blocks = bins->color_blocks + bins->color_offset[col];
+        sm_team_claimer claimer;
+        sm_team_claimer_init(&claimer, &job->colour[col], th, nt);
         long lo, hi;
-        sm_bins_range(bins, bins->color_blocks, (long)bins->color_offset[col], (long)bins->color_offset[col + 1], nt, th,
-                      &lo, &hi);
-        for (long t = lo; t < hi; t++) {
-            const sm_pblock *pb = &bins->pb[bins->color_blocks[t]];
-            if (pblock_needed(s, pb)) job->fn(s, pb, th, job->arg);
-        }
+        while (sm_team_claim(&claimer, 1, &lo, &hi))
+            for (long t = lo; t < hi; t++) {
+                const sm_pblock *pb = &bins->pb[blocks[t]];
+                if (pblock_needed(s, pb)) job->fn(s, pb, th, job->arg);
+            }
         sm_team_barrier();
     }
 }
 
 static void sweep_by_colour(const sm_implicit_sys *s, block_fn fn, void *arg) {
-    sweep_job job = {s, fn, arg};
+    sweep_job job = {.s = s, .fn = fn, .arg = arg};
+    const uint32_t *off = s->bins->color_offset;
+    for (int col = 0; col < NCOLORS; col++) sm_team_claims_init(&job.colour[col], (long)(off[col + 1] - off[col]));
     sm_team_run(s->c->threads, sweep_share, &job);
 }
 

@@ -180,7 +180,8 @@ void SM_FN(sm_imp_particle_pass)(const sm_implicit_sys *s, sm_imp_pass kind, con
 typedef void (*sm_imp_particle_scatter)(const sm_implicit_sys *s, const void *arg, size_t p, const sm_pblock *pb,
                                         const int bc[3], sm_real *out);
 /* fn for every particle, colour by colour (no two threads reach a node at once; the same sum
- * order for any thread count), with P2G's static particle split (sm_bins_range). */
+ * order for any thread count), the blocks of a colour claimed from both ends of its list as in P2G
+ * (core/team.h, sm_team_claim). */
 void SM_FN(sm_imp_scatter_by_colour)(const sm_implicit_sys *s, sm_imp_particle_scatter fn, const void *arg,
                                      sm_real *out);
 

@@ -67,14 +67,13 @@ struct sm_pool {
     worker **workers;
 };
 
-static _Thread_local sm_pool *tl_pool; /* the pool this thread owns */
 static _Thread_local sm_pool *tl_run;  /* the pool of the run this thread is in */
 static _Thread_local int tl_T = 1;     /* that run's thread count (1: none) */
 static _Thread_local int tl_depth;     /* runs this thread is inside */
 static _Thread_local int tl_spin = SM_TEAM_SPIN; /* polls before yielding, for this run */
 
 static pthread_once_t once = PTHREAD_ONCE_INIT;
-static pthread_key_t pool_key;
+static pthread_key_t pool_key; /* the pool the calling thread owns (freed when it ends) */
 static int cores = 1; /* the cores this process may run on (its affinity mask) */
 
 static uint64_t wait_change(sm_pool *p, _Atomic uint64_t *word, uint64_t old) {
@@ -160,10 +159,7 @@ static void pool_free(void *v) {
 }
 
 /* In a child of fork() only the forking thread exists: its pool's workers are gone. */
-static void forget_pool_in_child(void) {
-    tl_pool = NULL;
-    pthread_setspecific(pool_key, NULL);
-}
+static void forget_pool_in_child(void) { pthread_setspecific(pool_key, NULL); }
 
 static void init_once(void) {
     cpu_set_t set;
@@ -199,7 +195,7 @@ static int add_worker(sm_pool *p) {
 /* This thread's pool with at least `need` workers if they can be made (NULL: no pool). */
 static sm_pool *pool_get(int need) {
     pthread_once(&once, init_once);
-    sm_pool *p = tl_pool;
+    sm_pool *p = pthread_getspecific(pool_key);
     if (!p) {
         p = calloc(1, sizeof *p);
         if (!p) return NULL;
@@ -212,8 +208,12 @@ static sm_pool *pool_get(int need) {
             free(p);
             return NULL;
         }
-        tl_pool = p;
-        pthread_setspecific(pool_key, p);
+        if (pthread_setspecific(pool_key, p) != 0) {
+            pthread_cond_destroy(&p->cv);
+            pthread_mutex_destroy(&p->mu);
+            free(p);
+            return NULL;
+        }
     }
     while (p->nworkers < need && add_worker(p)) {
     }

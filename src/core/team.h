@@ -10,8 +10,10 @@
  * processes (issue 18 item 3) therefore sees sleeping workers between steps, and the governor
  * (integrate/governor.h) chooses one thread when two do not pay.
  *
- * The split of work among threads is the callers' (sm_team_split), as it was with OpenMP's static
- * schedule; the team decides nothing that reaches a result, so the bits do not depend on it.
+ * The split of work among threads is the callers': a static share (sm_team_split, sm_team_for), as
+ * with OpenMP's static schedule, or chunks claimed from both ends (sm_team_claim) where which thread
+ * does an item changes no result; the team decides nothing that reaches a result, so the bits do
+ * not depend on it.
  * Each calling thread has its own pool (thread-local), made on its first run of T > 1 threads and
  * grown when a run asks for more; a pool's workers end with the thread that owns it. */
 #ifndef SM_CORE_TEAM_H

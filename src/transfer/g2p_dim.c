@@ -266,7 +266,6 @@ typedef struct g2p_job {
     _Atomic double vmax2;
 } g2p_job;
 
-/* Thread t's share of the particle blocks (equal particle counts, as in P2G). */
 /* What a thread's blocks measured. */
 typedef struct g2p_tally {
     unsigned long long clamped, projected, bad;

@@ -15,6 +15,11 @@
  *       cases per set-up fitted over [0.05 s, 0.15 s] on the short slope (the CTest subset).
  *   sm_validate incline_gate [--quick]   the same with the contact gate, contact_gap = 0.35 cells
  *       (sm_world_def.contact_gap; off by default).
+ *   sm_validate incline_stiffness [--quick]   the cases near the sliding threshold (30 deg, mu 0.5
+ *       and 0.7, separating plane, max_dt 2e-5 s) of every set-up for E = 1e6, 3e6, 1e7, 3e7, 1e8
+ *       Pa: how the block's elasticity (its ringing) moves the error. At 1e8 the elastic step
+ *       (elastic_cfl 0.6 dx / c, about 1.8e-5 s) binds. --quick: E = 1e6 and 1e7, tilted and
+ *       aligned, on the short window.
  *   sm_validate column [--quick]    gravity-loaded elastic column, 2D plane strain: width H/4
  *       between slip walls on a slip base, H = 1 m, rho 1000, E 1e7, nu 0.3 (strain 1e-3), released
  *       stress free (explicit steps). Uniaxial strain: sigma_yy = -rho g (H - y), sigma_xx / sigma_yy
@@ -53,6 +58,8 @@ enum { INCLINE_TILTED, INCLINE_ALIGNED, INCLINE_SHIFTED, INCLINE_SETUPS };
 /* The contact gate of the incline runs (sm_world_def.contact_gap): `sm_validate incline_gate` runs the
  * same table with 0.35 cells. */
 static double incline_gap = INFINITY;
+/* The block's Young's modulus (Pa): 1e6, or each of incline_stiffness's. */
+static double incline_youngs = 1e6;
 
 /* One block-on-incline run (setup: INCLINE_*); returns the acceleration along the slope fitted
  * over [t0, t_end]. `extra` (m) lengthens the slope above the plane's
@@ -89,7 +96,7 @@ static double incline_run(int dim, double th_deg, double mu, int setup, sm_colli
         exit(2);
     }
     sm_material_def m = sm_material_def_elastic();
-    m.youngs_modulus = 1e6;
+    m.youngs_modulus = incline_youngs;
     int mat = -1;
     if (sm_world_add_material(w, &m, &mat) != SM_OK) fail("material", w);
     sm_collider_def c = sm_collider_def_default();
@@ -147,6 +154,27 @@ static void incline(int quick) {
                 fflush(stdout);
             }
         }
+}
+
+/* sm_validate incline_stiffness: the threshold cases against the block's stiffness. */
+static void incline_stiffness(int quick) {
+    static const char *const names[INCLINE_SETUPS] = {"tilted", "aligned", "shifted"};
+    static const double youngs[] = {1e6, 3e6, 1e7, 3e7, 1e8}, mus[] = {0.5, 0.7};
+    printf("dim,setup,mode,theta,mu,youngs,max_dt,expected,measured,rel_error\n");
+    const double t0 = quick ? 0.05 : 0.5, t_end = quick ? 0.15 : 1.2, extra = quick ? 0 : 2.6, th = 30;
+    const int ne = quick ? 3 : 5, nsetups = quick ? 2 : INCLINE_SETUPS;
+    for (int e = 0; e < ne; e += quick ? 2 : 1)
+        for (int setup = 0; setup < nsetups; setup++)
+            for (int i = 0; i < 2; i++) {
+                incline_youngs = youngs[e];
+                const double r = th * PI / 180, mu = mus[i];
+                const double expect = tan(r) > mu ? G * (sin(r) - mu * cos(r)) : 0;
+                const double a = incline_run(2, th, mu, setup, SM_COLLIDE_SEPARATE, 2e-5, t0, t_end, extra);
+                printf("2,%s,separate,%g,%g,%g,2e-05,%.6f,%.6f,%.3g\n", names[setup], th, mu, youngs[e], expect, a,
+                       expect > 0 ? (a - expect) / expect : a / G);
+                fflush(stdout);
+            }
+    incline_youngs = 1e6;
 }
 
 /* The elastic column's results (sm_validate column). */
@@ -326,10 +354,11 @@ int main(int argc, char **argv) {
     int quick = argc > 2 && !strcmp(argv[2], "--quick");
     if (argc >= 2 && !strcmp(argv[1], "incline")) incline(quick);
     else if (argc >= 2 && !strcmp(argv[1], "incline_gate")) incline_gap = 0.35, incline(quick);
+    else if (argc >= 2 && !strcmp(argv[1], "incline_stiffness")) incline_stiffness(quick);
     else if (argc >= 2 && !strcmp(argv[1], "column")) column(quick);
     else if (argc >= 2 && !strcmp(argv[1], "shear")) shear(quick);
     else {
-        fprintf(stderr, "usage: sm_validate incline|incline_gate|column|shear [--quick]\n");
+        fprintf(stderr, "usage: sm_validate incline|incline_gate|incline_stiffness|column|shear [--quick]\n");
         return 2;
     }
     return 0;

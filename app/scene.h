@@ -59,7 +59,7 @@ typedef struct sm_scene_settings {
  * is the Lua text and path only names it in messages (NULL: "scene"). quality: "preview" (NULL),
  * "paper" or "test". params: --set KEY=VALUE pairs, as params.KEY (a number if VALUE parses as
  * one, true/false as booleans, else the string); a key the scene never reads is an error.
- * threads: OpenMP threads for the world, 0 = default. Returns SM_OK and *out, or SM_ERR_INVALID
+ * threads: the world's step threads, 0 = the library chooses. Returns SM_OK and *out, or SM_ERR_INVALID
  * (bad input) / SM_ERR_IO (the file cannot be read) / SM_ERR_NOMEM with *out = NULL and a message
  * in err. */
 sm_status sm_scene_load(const char *path, const char *source, const sm_scene_param *params, int nparams,

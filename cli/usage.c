@@ -32,7 +32,7 @@ void cli_usage_run(FILE *f) {
                "  --overwrite        replace another run's files in OUT (only those its run_manifest.txt lists)\n"
                "  --set KEY=VALUE    scene parameter, seen by the scene as params.KEY (repeatable)\n"
                "  --quality Q        preview (default), paper (the thesis's resolution) or test (tiny, for CI)\n"
-               "  --threads N        OpenMP threads (default: all cores); results do not depend on it\n"
+               "  --threads N        threads of the step (default: the library chooses, up to all cores); results do not depend on it\n"
                "  --render           also render each frame to OUTDIR/frame_NNNN.png\n"
                "  --video            assemble OUTDIR/video.mp4 with ffmpeg at the end (renders the frames: implies --render)\n"
                "  -q, --quiet        no banner, progress line or summary (warnings and errors still)\n"

@@ -130,18 +130,20 @@ else
     bad "resume on 2 ranks: exit $?: $(head -c 600 "$TMP/err")"
 fi
 
-# SIGTERM to mpirun during a frame of about 200,000 steps: every rank stops at the next step (not
+# SIGTERM to mpirun during a frame of about 200,000 steps of 192 particles: every rank stops at the next step (not
 # after the frame), rank 0 keeps the last whole frame, and one process resumes it to the
 # one-process frames. OpenMPI's mpirun (4.1) passes SIGTERM on to the ranks odls_base_sigkill_timeout
 # seconds after it gets it and SIGKILLs them as long again later (measured: README, "Distributed
-# runs"): 3 s here, so that a loaded machine does not decide the test.
+# runs"): 3 s here, so that a loaded machine does not decide the test. A frame takes about 5.7 s on
+# 2 ranks here, the signal reaches them 3.3 s into it (2026-12-07; with a third as many particles,
+# 3.7 s a frame, a fast run once ended frame 1 before the signal).
 tiny=$TMP/tiny.lua
 cat > "$tiny" <<'LUA'
 return {
   dim = 2, dx = 0.05, ppc = 4, fps = 0.005, frames = 2,
   domain = { min = {0, 0}, max = {1, 1} },
   materials = { sand = { model = "sand", friction_angle = 30 } },
-  objects = { { shape = { type = "box", center = {0.5, 0.3}, half_extent = {0.1, 0.1} }, material = "sand" } },
+  objects = { { shape = { type = "box", center = {0.5, 0.3}, half_extent = {0.3, 0.1} }, material = "sand" } },
   colliders = { { shape = { type = "halfspace", point = {0, 0.1}, normal = {0, 1} }, mode = "sticky" } },
 }
 LUA

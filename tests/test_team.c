@@ -1,9 +1,10 @@
 /* The step's thread team (src/core/team.h): every thread number runs once per run, the barrier
  * separates phases, loops cover their items once, runs nest, and the pool survives its workers
- * sleeping, its owner thread ending and a fork. */
-#define _POSIX_C_SOURCE 200809L /* fork, nanosleep, waitpid */
+ * sleeping, its owner thread ending, a fork, and its threads sharing one core. */
+#define _GNU_SOURCE /* fork, nanosleep, waitpid; pthread_setaffinity_np, sched_getcpu */
 
 #include <pthread.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -262,6 +263,52 @@ static void test_many_runs(void) {
     }
 }
 
+/* Two threads of a run on one core (as a busy process beside the run can leave them): each
+ * thread pins itself to the caller's core, then the phases run; afterwards every thread takes the
+ * cores it had back. A waiter that sees the thread it waits for on its own core yields instead of
+ * polling (team.c); here the phases must simply come out right. */
+typedef struct pinned {
+    phases ph;
+    int core;
+    cpu_set_t before[MAXT];
+    atomic_int pin_failed, on_core;
+} pinned;
+
+static void pinned_work(void *arg, int t, int T) {
+    pinned *pn = arg;
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(pn->core, &one);
+    if (pthread_getaffinity_np(pthread_self(), sizeof pn->before[t], &pn->before[t]) != 0 ||
+        pthread_setaffinity_np(pthread_self(), sizeof one, &one) != 0) {
+        atomic_store(&pn->pin_failed, 1);
+        return;
+    }
+    sm_team_barrier();
+    if (sched_getcpu() == pn->core) atomic_fetch_add(&pn->on_core, 1);
+    phase_work(&pn->ph, t, T);
+    pthread_setaffinity_np(pthread_self(), sizeof pn->before[t], &pn->before[t]);
+}
+
+static void test_one_core(void) {
+    const int core = sched_getcpu();
+    if (core < 0) return;
+    for (int T = 2; T <= 3; T++) {
+        pinned pn = {.ph = {.rounds = 2000}, .core = core};
+        sm_team_run(T, pinned_work, &pn);
+        if (atomic_load(&pn.pin_failed)) {
+            printf("test_team: pinning to core %d refused; the one-core case is not run\n", core);
+            return;
+        }
+        CHECK(atomic_load(&pn.on_core) == T);
+        CHECK(atomic_load(&pn.ph.mismatches) == 0);
+        for (int t = 0; t < T; t++) CHECK(pn.ph.slot[t] == pn.ph.rounds);
+    }
+    calls c = {.T = 2, .caller = pthread_self()};
+    sm_team_run(2, count_calls, &c); /* the threads work on after taking their cores back */
+    CHECK(atomic_load(&c.count[0]) == 1 && atomic_load(&c.count[1]) == 1);
+}
+
 int main(void) {
     test_each_thread_once();
     test_barrier_phases();
@@ -273,5 +320,6 @@ int main(void) {
     test_thread_pools();
     test_fork();
     test_many_runs();
+    test_one_core();
     return sm_test_summary("test_team");
 }

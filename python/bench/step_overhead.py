@@ -116,7 +116,7 @@ def main():
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--steps", type=int, default=20)
     ap.add_argument("--warmup", type=int, default=5)
-    ap.add_argument("--threads", type=int, default=1, help="OpenMP threads (0: OpenMP's default)")
+    ap.add_argument("--threads", type=int, default=1, help="threads of the step (0: the library chooses)")
     a = ap.parse_args()
     exe = os.path.join(a.build, "python", "step_loop")
     print("sandmpm %s, sm_real %s, threads %s, %d rounds of %d steps after %d warm-up steps; load average %s"

@@ -43,6 +43,16 @@
 #define SM_TEAM_SPIN_OVER 16
 #define SM_TEAM_YIELDS 16
 
+/* A waiter also stops polling when a thread it may be waiting for last reported the waiter's
+ * own core (sched_getcpu: a read of the kernel's rseq area): a busy process beside the run can
+ * leave two threads of a run on one core, where polling only delays the thread it waits for by
+ * the poll (a run fixed at 2 threads beside one busy process, 2D 5,000 particles: docs/
+ * benchmarks.md "Two threads on one core"). Threads report at the start of a run, on arriving at
+ * a barrier and when they wait; the first SM_TEAM_CPU_SLOTS thread numbers are tracked, and the
+ * check is repeated every SM_TEAM_CPU_RECHECK polls. */
+#define SM_TEAM_CPU_SLOTS 64
+#define SM_TEAM_CPU_RECHECK 1024
+
 #define QUIT_T 0u /* a dispatch word's T that ends the workers */
 
 typedef struct sm_pool sm_pool;
@@ -59,6 +69,8 @@ struct sm_pool {
     _Alignas(64) _Atomic unsigned arrived;  /* threads in the barrier */
     _Alignas(64) _Atomic uint64_t barrier_gen;
     _Alignas(64) _Atomic int sleepers;
+    _Atomic unsigned run_T;                 /* the latest run's thread count */
+    _Alignas(64) _Atomic int cpu[SM_TEAM_CPU_SLOTS]; /* the core each thread number last reported (-1: none) */
     sm_team_fn fn; /* the current run's, written before its dispatch word */
     void *arg;
     pthread_mutex_t mu;
@@ -71,16 +83,31 @@ static _Thread_local sm_pool *tl_run;  /* the pool of the run this thread is in 
 static _Thread_local int tl_T = 1;     /* that run's thread count (1: none) */
 static _Thread_local int tl_depth;     /* runs this thread is inside */
 static _Thread_local int tl_spin = SM_TEAM_SPIN; /* polls before yielding, for this run */
+static _Thread_local int tl_t;                   /* this thread's number in its pool's runs */
 
 static pthread_once_t once = PTHREAD_ONCE_INIT;
 static pthread_key_t pool_key; /* the pool the calling thread owns (freed when it ends) */
 static int cores = 1; /* the cores this process may run on (its affinity mask) */
 
+/* Records this thread's core; returns 1 when another thread of the latest run last reported the
+ * same core (polling would hold the core that thread needs). */
+static int report_core(sm_pool *p) {
+    const int me = sched_getcpu();
+    if (tl_t < SM_TEAM_CPU_SLOTS) atomic_store_explicit(&p->cpu[tl_t], me, memory_order_relaxed);
+    if (me < 0) return 0;
+    const unsigned T = atomic_load_explicit(&p->run_T, memory_order_relaxed);
+    for (unsigned u = 0; u < T && u < SM_TEAM_CPU_SLOTS; u++)
+        if ((int)u != tl_t && atomic_load_explicit(&p->cpu[u], memory_order_relaxed) == me) return 1;
+    return 0;
+}
+
 static uint64_t wait_change(sm_pool *p, _Atomic uint64_t *word, uint64_t old) {
-    for (int i = 0; i < tl_spin; i++) {
+    int spin = report_core(p) ? 0 : tl_spin;
+    for (int i = 0; i < spin; i++) {
         const uint64_t v = atomic_load_explicit(word, memory_order_acquire);
         if (v != old) return v;
         CPU_RELAX();
+        if ((i + 1) % SM_TEAM_CPU_RECHECK == 0 && report_core(p)) break;
     }
     for (int i = 0; i < SM_TEAM_YIELDS; i++) {
         const uint64_t v = atomic_load_explicit(word, memory_order_acquire);
@@ -110,6 +137,7 @@ void sm_team_barrier(void) {
     sm_pool *p = tl_run;
     /* The generation cannot advance before this thread arrives. */
     const uint64_t g = atomic_load_explicit(&p->barrier_gen, memory_order_acquire);
+    if (tl_t < SM_TEAM_CPU_SLOTS) atomic_store_explicit(&p->cpu[tl_t], sched_getcpu(), memory_order_relaxed);
     if (atomic_fetch_add_explicit(&p->arrived, 1, memory_order_acq_rel) == (unsigned)tl_T - 1) {
         atomic_store_explicit(&p->arrived, 0, memory_order_relaxed);
         publish(p, &p->barrier_gen, g + 1);
@@ -122,6 +150,8 @@ static void run_as(sm_pool *p, int t, int T) {
     tl_spin = T > cores ? SM_TEAM_SPIN_OVER : SM_TEAM_SPIN; /* also for the wait for the next run */
     tl_run = p;
     tl_T = T;
+    tl_t = t;
+    if (t < SM_TEAM_CPU_SLOTS) atomic_store_explicit(&p->cpu[t], sched_getcpu(), memory_order_relaxed);
     tl_depth++;
     p->fn(p->arg, t, T);
     sm_team_barrier();
@@ -134,6 +164,7 @@ static void *worker_main(void *arg) {
     const worker *wk = arg;
     sm_pool *p = wk->pool;
     uint64_t seen = wk->start;
+    tl_t = wk->index;
     for (;;) {
         seen = wait_change(p, &p->dispatch, seen);
         const unsigned T = (unsigned)(seen & 0xffffffffu);
@@ -199,6 +230,7 @@ static sm_pool *pool_get(int need) {
     if (!p) {
         p = calloc(1, sizeof *p);
         if (!p) return NULL;
+        for (int u = 0; u < SM_TEAM_CPU_SLOTS; u++) atomic_init(&p->cpu[u], -1);
         if (pthread_mutex_init(&p->mu, NULL) != 0) {
             free(p);
             return NULL;
@@ -234,6 +266,7 @@ void sm_team_run(int T, sm_team_fn fn, void *arg) {
     }
     p->fn = fn;
     p->arg = arg;
+    atomic_store_explicit(&p->run_T, (unsigned)T, memory_order_relaxed);
     const uint64_t d = atomic_load(&p->dispatch);
     publish(p, &p->dispatch, (((d >> 32) + 1) << 32) | (uint64_t)T);
     run_as(p, 0, T);

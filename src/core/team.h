@@ -6,7 +6,8 @@
  * about 1 us each on this project's virtual machines, 3 us per empty two-thread region, and an
  * explicit step makes 19 such calls (strace; docs/benchmarks.md "Small scenes, third look").
  * Here a waiting thread spins for a while (SM_TEAM_SPIN) and only then sleeps on a condition
- * variable; the thread that releases it signals only when one sleeps. A machine shared with busy
+ * variable (it does not spin where a thread it waits for last ran on its own core); the thread
+ * that releases it signals only when one sleeps. A machine shared with busy
  * processes (issue 18 item 3) therefore sees sleeping workers between steps, and the governor
  * (integrate/governor.h) chooses one thread when two do not pay.
  *

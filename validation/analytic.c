@@ -13,6 +13,11 @@
  *       "the fit window"); the slope is long enough for the fastest case to stay on it. max_dt =
  *       2e-5 s (fine; one case also at 1e-4 s; 3D at 1e-4 s, tilted only). --quick: the first two
  *       cases per set-up fitted over [0.05 s, 0.15 s] on the short slope (the CTest subset).
+ *       Also printed: normal_accel, the same fit of the block's mean velocity along the plane's
+ *       normal, and rel_error_normal, the error against Coulomb's law with the normal force the
+ *       block had, M (g cos th + normal_accel): a = g (sin th - mu cos th) - mu normal_accel
+ *       (sliding cases; a bouncing block's normal force over the window is not M g cos th); and
+ *       normal_rms, the RMS of that normal velocity about its mean over the window (m/s).
  *   sm_validate incline_gate [--quick]   the same with the contact gate, contact_gap = 0.35 cells
  *       (sm_world_def.contact_gap; off by default).
  *   sm_validate incline_stiffness [--quick]   the cases near the sliding threshold (30 deg, mu 0.5
@@ -62,10 +67,12 @@ static double incline_gap = INFINITY;
 static double incline_youngs = 1e6;
 
 /* One block-on-incline run (setup: INCLINE_*); returns the acceleration along the slope fitted
- * over [t0, t_end]. `extra` (m) lengthens the slope above the plane's
+ * over [t0, t_end], and in *a_normal the same fit of the block's mean velocity along the plane's
+ * normal (0 for a block that stays on the plane; a bouncing block's normal momentum changes over the
+ * window, and the normal force with it), in *vn_rms that velocity's RMS about its mean (m/s). `extra` (m) lengthens the slope above the plane's
  * anchor p0: the block starts that much farther up it. */
 static double incline_run(int dim, double th_deg, double mu, int setup, sm_collide_mode mode, double max_dt,
-                          double t0, double t_end, double extra) {
+                          double t0, double t_end, double extra, double *a_normal, double *vn_rms) {
     const double th = th_deg * PI / 180;
     const int tilted = setup == INCLINE_TILTED;
     sm_world_def def = sm_world_def_default();
@@ -116,22 +123,25 @@ static double incline_run(int dim, double th_deg, double mu, int setup, sm_colli
     sd.material = mat;
     sd.ppc = dim == 2 ? 4 : 8;
     if (sm_world_seed_shape(w, &box, &sd, NULL) != SM_OK) fail("seed", w);
-    double St = 0, Sv = 0, Stt = 0, Stv = 0;
+    double St = 0, Sv = 0, Stt = 0, Stv = 0, Sn = 0, Stn = 0, Snn = 0;
     int k = 0;
     sm_diagnostics d;
     for (int f = 1; f * 0.005 <= t_end + 1e-9; f++) {
         if (sm_world_advance(w, f * 0.005) != SM_OK) fail("advance", w);
         sm_world_diagnostics(w, &d);
         double t = sm_world_time(w), v = (d.momentum[0] * tdown[0] + d.momentum[1] * tdown[1]) / d.total_mass;
-        if (t >= t0 - 1e-9) St += t, Sv += v, Stt += t * t, Stv += t * v, k++;
+        double vn = (d.momentum[0] * n[0] + d.momentum[1] * n[1]) / d.total_mass;
+        if (t >= t0 - 1e-9) St += t, Sv += v, Stt += t * t, Stv += t * v, Sn += vn, Stn += t * vn, Snn += vn * vn, k++;
     }
     sm_world_destroy(w);
+    *a_normal = (k * Stn - St * Sn) / (k * Stt - St * St);
+    *vn_rms = sqrt(fmax(Snn / k - (Sn / k) * (Sn / k), 0));
     return (k * Stv - St * Sv) / (k * Stt - St * St);
 }
 
 static void incline(int quick) {
     static const char *const names[INCLINE_SETUPS] = {"tilted", "aligned", "shifted"};
-    printf("dim,setup,mode,theta,mu,max_dt,expected,measured,rel_error\n");
+    printf("dim,setup,mode,theta,mu,max_dt,expected,measured,rel_error,normal_accel,rel_error_normal,normal_rms\n");
     /* theta, mu, mode (0 separate, 1 slip), max_dt; 3D: the first case, tilted only */
     const double cases[][4] = {{30, 0.2, 0, 2e-5}, {30, 0.0, 0, 2e-5}, {30, 0.5, 0, 2e-5}, {30, 0.7, 0, 2e-5},
                                {45, 0.3, 0, 2e-5}, {30, 0.2, 0, 1e-4}, {30, 0.2, 1, 2e-5}};
@@ -147,10 +157,13 @@ static void incline(int quick) {
                 sm_collide_mode mode = cases[i][2] > 0 ? SM_COLLIDE_SLIP : SM_COLLIDE_SEPARATE;
                 double r = th * PI / 180;
                 double expect = tan(r) > mu ? G * (sin(r) - mu * cos(r)) : 0;
-                double a = incline_run(dim, th, mu, setup, mode, dt, t0, t_end, extra);
-                printf("%d,%s,%s,%g,%g,%g,%.6f,%.6f,%.3g\n", dim, names[setup],
+                double an = 0, vr = 0, a = incline_run(dim, th, mu, setup, mode, dt, t0, t_end, extra, &an, &vr);
+                /* Coulomb's law with the block's own normal motion: N = M (g cos th + a_n), so a
+                 * sliding block's acceleration is g (sin th - mu cos th) - mu a_n (sliding cases) */
+                printf("%d,%s,%s,%g,%g,%g,%.6f,%.6f,%.3g,%.6f,%.3g,%.3g\n", dim, names[setup],
                        mode == SM_COLLIDE_SLIP ? "slip" : "separate", th, mu, dt, expect, a,
-                       expect > 0 ? (a - expect) / expect : a / G);
+                       expect > 0 ? (a - expect) / expect : a / G, an,
+                       expect > 0 ? (a - (expect - mu * an)) / expect : NAN, vr);
                 fflush(stdout);
             }
         }
@@ -169,7 +182,8 @@ static void incline_stiffness(int quick) {
                 incline_youngs = youngs[e];
                 const double r = th * PI / 180, mu = mus[i];
                 const double expect = tan(r) > mu ? G * (sin(r) - mu * cos(r)) : 0;
-                const double a = incline_run(2, th, mu, setup, SM_COLLIDE_SEPARATE, 2e-5, t0, t_end, extra);
+                double an = 0, vr = 0;
+                const double a = incline_run(2, th, mu, setup, SM_COLLIDE_SEPARATE, 2e-5, t0, t_end, extra, &an, &vr);
                 printf("2,%s,separate,%g,%g,%g,2e-05,%.6f,%.6f,%.3g\n", names[setup], th, mu, youngs[e], expect, a,
                        expect > 0 ? (a - expect) / expect : a / G);
                 fflush(stdout);

@@ -11,9 +11,42 @@ def analytic(c):
     def ikey(r):
         return (int(r["dim"]), r["setup"], r["mode"], r["theta"], r["mu"], r["max_dt"])
     gate = {ikey(r): r for r in an.get("incline_gate", [])}
+    def sliding(r):
+        return r["expected"] > 0
+    def has_normal(r):
+        return "rel_error_normal" in r and isinstance(r["rel_error_normal"], float) and r["rel_error_normal"] == r["rel_error_normal"]
     irows = [[int(r["dim"]), r["setup"], r["mode"], f"{r['theta']:g}", f"{r['mu']:g}", f"{r['max_dt']:g}",
               f"{r['expected']:.4f}", f"{r['measured']:.4f}", f"{r['rel_error']:.2e}",
+              f"{r['normal_accel']:+.4f}" if "normal_accel" in r else "-",
+              f"{r['rel_error_normal']:.2e}" if has_normal(r) else "-",
+              f"{1e3 * r['normal_rms']:.2g}" if "normal_rms" in r else "-",
               f"{gate[ikey(r)]['rel_error']:.2e}" if ikey(r) in gate else "-"] for r in inc]
+    slid = [r for r in inc if sliding(r) and has_normal(r)]
+    normal_text = ""
+    if slid:
+        worst = max(slid, key=lambda r: abs(r["rel_error_normal"]))
+        mu5 = [r for r in inc if "normal_rms" in r and r["mu"] == 0.5 and r["mode"] == "separate"]
+        nofric = [r for r in inc if "normal_rms" in r and r["mu"] == 0]
+        static = [r for r in inc if not sliding(r)]
+        normal_text = f"""
+**The block's normal motion.** Coulomb's law makes the friction μ times the normal force, and the
+normal force is M g cos θ only while the block keeps still across the plane. It does not: with
+friction the block vibrates normal to the plane (column "normal RMS": the RMS of its mean velocity
+along the plane's normal over the fit window; at μ = 0.5 {", ".join(f'{r["setup"]} {1e3 * r["normal_rms"]:.2g}' for r in mu5)} mm/s,
+at μ = 0 {max(1e3 * r["normal_rms"] for r in nofric):.2g} mm/s at most), and where the window cuts that vibration the block's normal
+momentum changes over it: the normal force over the window is M (g cos θ + a_n), a_n (column
+"a_n") the slope of the block's normal velocity fitted as the acceleration is. Against Coulomb's law
+with that force, a = g (sin θ − μ cos θ) − μ a_n (column "rel. error, normal force"), all
+{len(slid)} sliding cases are within {abs(worst["rel_error_normal"]):.1e} ({worst["setup"]} {worst["mode"]} μ {worst["mu"]:g}): the contact delivers
+Coulomb's law in sum on every placement of the plane, and what the plain error shows at the
+threshold is the vibration, which the rigid block of the formula does not have. It is largest on
+the grid-aligned plane, where the contact damps it least ("why the aligned block keeps sliding",
+below). The {len(static)} static cases (tan θ ≤ μ: the law is an inequality) stay at the plain
+measure, within {max(abs(r["rel_error"]) for r in static):.1e} of g; they hide a steady slide on the grid-aligned planes (below).
+Not the fit (by hand, 02da9fd, float): a quadratic fit of the block's displacement (its velocity
+integrated frame by frame) gave 0.6606 and 0.6557 m/s² for aligned and tilted μ = 0.5, against
+0.6610 and 0.6560 from the velocity.
+"""
     ginc = list(gate.values())
     gate_line = (f"With the contact gate (last column, `sm_validate incline_gate`: contact_gap = 0.35, below) "
                  f"{sum(abs(r['rel_error']) <= 1e-3 for r in ginc)} of {len(ginc)} cases are within 1e-3, the "
@@ -128,13 +161,13 @@ gravity turned; "shifted": the same plane half a cell higher, between two node r
 "separate" (unilateral contact), and "slip" (the normal velocity of nodes inside is removed both
 ways) for two cases. The float build, as every run of this document.
 
-{T(["d", "set-up", "mode", "θ (°)", "μ", "max Δt (s)", "expected (m/s²)", "measured", "rel. error", "rel. error, contact gate"], irows)}
+{T(["d", "set-up", "mode", "θ (°)", "μ", "max Δt (s)", "expected (m/s²)", "measured", "rel. error", "a_n (m/s²)", "rel. error, normal force", "normal RMS (mm/s)", "rel. error, contact gate"], irows)}
 
 {sum(abs(r["rel_error"]) <= 1e-3 for r in inc)} of {len(inc)} cases are within 1e-3 (the default: no contact gate). Beyond it:
 {"; ".join(f"{r['setup']} {r['mode']} θ {r['theta']:g}° μ {r['mu']:g} ({r['rel_error']:+.2e})" for r in inc if abs(r["rel_error"]) > 1e-3) or "none"}.
 The cases away from the sliding threshold (μ ≤ 0.3) are within {max((abs(r["rel_error"]) for r in inc if r["mu"] <= 0.3), default=float("nan")):.1e}.
 {gate_line}
-{stiff_text}
+{normal_text}{stiff_text}
 What is left is at the threshold (tan 30° = 0.577: μ = 0.5 slides slowly, μ = 0.7 must stay), and
 it depends on where the plane lies in the grid. By hand (commit after c9df470, the double build,
 `build-double/tests/sm_validate incline`) the same table gave the same four cases beyond 1e-3,

@@ -25,6 +25,10 @@
  *       Pa: how the block's elasticity (its ringing) moves the error. At 1e8 the elastic step
  *       (elastic_cfl 0.6 dx / c, about 1.8e-5 s) binds. --quick: E = 1e6 and 1e7, tilted and
  *       aligned, on the short window.
+ *   sm_validate incline_resolution [--quick]   mu 0.5 at 30 deg (separating plane, max_dt 2e-5 s)
+ *       on every set-up at dx = 0.02, 0.01, 0.005 m with APIC, and at 0.01 m with PIC: the block's
+ *       normal vibration and what it does to the plain error, by resolution and transfer. --quick:
+ *       dx 0.02 only.
  *   sm_validate column [--quick]    gravity-loaded elastic column, 2D plane strain: width H/4
  *       between slip walls on a slip base, H = 1 m, rho 1000, E 1e7, nu 0.3 (strain 1e-3), released
  *       stress free (explicit steps). Uniaxial strain: sigma_yy = -rho g (H - y), sigma_xx / sigma_yy
@@ -65,6 +69,9 @@ enum { INCLINE_TILTED, INCLINE_ALIGNED, INCLINE_SHIFTED, INCLINE_SETUPS };
 static double incline_gap = INFINITY;
 /* The block's Young's modulus (Pa): 1e6, or each of incline_stiffness's. */
 static double incline_youngs = 1e6;
+/* The 2D cell size (m) and the transfer: 0.01 and APIC, or each of incline_resolution's. */
+static double incline_dx2 = 0.01;
+static sm_transfer incline_transfer = SM_TRANSFER_APIC;
 
 /* One block-on-incline run (setup: INCLINE_*); returns the acceleration along the slope fitted
  * over [t0, t_end], and in *a_normal the same fit of the block's mean velocity along the plane's
@@ -77,7 +84,8 @@ static double incline_run(int dim, double th_deg, double mu, int setup, sm_colli
     const int tilted = setup == INCLINE_TILTED;
     sm_world_def def = sm_world_def_default();
     def.dim = dim;
-    def.dx = dim == 2 ? 0.01 : 0.02;
+    def.dx = dim == 2 ? incline_dx2 : 0.02;
+    def.transfer = incline_transfer;
     def.max_dt = max_dt;
     def.contact_gap = incline_gap;
     def.domain_max[0] = 2.5 + extra; /* the aligned block's upper end (1.6 + 0.3 + extra + 0.1) clear of the wall */
@@ -173,7 +181,7 @@ static void incline(int quick) {
 static void incline_stiffness(int quick) {
     static const char *const names[INCLINE_SETUPS] = {"tilted", "aligned", "shifted"};
     static const double youngs[] = {1e6, 3e6, 1e7, 3e7, 1e8}, mus[] = {0.5, 0.7};
-    printf("dim,setup,mode,theta,mu,youngs,max_dt,expected,measured,rel_error\n");
+    printf("dim,setup,mode,theta,mu,youngs,max_dt,expected,measured,rel_error,normal_accel,rel_error_normal,normal_rms\n");
     const double t0 = quick ? 0.05 : 0.5, t_end = quick ? 0.15 : 1.2, extra = quick ? 0 : 2.6, th = 30;
     const int ne = quick ? 3 : 5, nsetups = quick ? 2 : INCLINE_SETUPS;
     for (int e = 0; e < ne; e += quick ? 2 : 1)
@@ -184,11 +192,34 @@ static void incline_stiffness(int quick) {
                 const double expect = tan(r) > mu ? G * (sin(r) - mu * cos(r)) : 0;
                 double an = 0, vr = 0;
                 const double a = incline_run(2, th, mu, setup, SM_COLLIDE_SEPARATE, 2e-5, t0, t_end, extra, &an, &vr);
-                printf("2,%s,separate,%g,%g,%g,2e-05,%.6f,%.6f,%.3g\n", names[setup], th, mu, youngs[e], expect, a,
-                       expect > 0 ? (a - expect) / expect : a / G);
+                printf("2,%s,separate,%g,%g,%g,2e-05,%.6f,%.6f,%.3g,%.6f,%.3g,%.3g\n", names[setup], th, mu, youngs[e],
+                       expect, a, expect > 0 ? (a - expect) / expect : a / G, an,
+                       expect > 0 ? (a - (expect - mu * an)) / expect : NAN, vr);
                 fflush(stdout);
             }
     incline_youngs = 1e6;
+}
+
+/* sm_validate incline_resolution: the threshold case by resolution and transfer. */
+static void incline_resolution(int quick) {
+    static const char *const names[INCLINE_SETUPS] = {"tilted", "aligned", "shifted"};
+    static const struct { double dx; sm_transfer tr; } runs[] = {
+        {0.02, SM_TRANSFER_APIC}, {0.01, SM_TRANSFER_APIC}, {0.005, SM_TRANSFER_APIC}, {0.01, SM_TRANSFER_PIC}};
+    printf("dim,setup,mode,theta,mu,dx,transfer,max_dt,expected,measured,rel_error,normal_accel,rel_error_normal,"
+           "normal_rms\n");
+    const double t0 = quick ? 0.05 : 0.5, t_end = quick ? 0.15 : 1.2, extra = quick ? 0 : 2.6, th = 30, mu = 0.5;
+    const double r = th * PI / 180, expect = G * (sin(r) - mu * cos(r));
+    for (int i = 0; i < (quick ? 1 : 4); i++)
+        for (int setup = 0; setup < INCLINE_SETUPS; setup++) {
+            incline_dx2 = runs[i].dx, incline_transfer = runs[i].tr;
+            double an = 0, vr = 0;
+            const double a = incline_run(2, th, mu, setup, SM_COLLIDE_SEPARATE, 2e-5, t0, t_end, extra, &an, &vr);
+            printf("2,%s,separate,%g,%g,%g,%s,2e-05,%.6f,%.6f,%.3g,%.6f,%.3g,%.3g\n", names[setup], th, mu, runs[i].dx,
+                   runs[i].tr == SM_TRANSFER_PIC ? "pic" : "apic", expect, a, (a - expect) / expect, an,
+                   (a - (expect - mu * an)) / expect, vr);
+            fflush(stdout);
+        }
+    incline_dx2 = 0.01, incline_transfer = SM_TRANSFER_APIC;
 }
 
 /* The elastic column's results (sm_validate column). */
@@ -369,10 +400,11 @@ int main(int argc, char **argv) {
     if (argc >= 2 && !strcmp(argv[1], "incline")) incline(quick);
     else if (argc >= 2 && !strcmp(argv[1], "incline_gate")) incline_gap = 0.35, incline(quick);
     else if (argc >= 2 && !strcmp(argv[1], "incline_stiffness")) incline_stiffness(quick);
+    else if (argc >= 2 && !strcmp(argv[1], "incline_resolution")) incline_resolution(quick);
     else if (argc >= 2 && !strcmp(argv[1], "column")) column(quick);
     else if (argc >= 2 && !strcmp(argv[1], "shear")) shear(quick);
     else {
-        fprintf(stderr, "usage: sm_validate incline|incline_gate|incline_stiffness|column|shear [--quick]\n");
+        fprintf(stderr, "usage: sm_validate incline|incline_gate|incline_stiffness|incline_resolution|column|shear [--quick]\n");
         return 2;
     }
     return 0;

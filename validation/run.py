@@ -249,7 +249,7 @@ def run_analytic(binary, quick, root):
     """sm_validate subcommands; each prints CSV with a header line, kept in ROOT/analytic_SUB.csv
     (reused while the command and the binary are unchanged)."""
     res = {}
-    for sub in ["incline", "incline_gate", "incline_stiffness", "column", "shear"]:
+    for sub in ["incline", "incline_gate", "incline_stiffness", "incline_resolution", "column", "shear"]:
         args = [binary, sub] + (["--quick"] if quick else [])
         path = os.path.join(root, f"analytic_{sub}.csv")
         key = shlex.join(args) + " " + binary_digest(binary) + "\n"

@@ -39,7 +39,9 @@ momentum changes over it: the normal force over the window is M (g cos θ + a_n)
 with that force, a = g (sin θ − μ cos θ) − μ a_n (column "rel. error, normal force"), all
 {len(slid)} sliding cases are within {abs(worst["rel_error_normal"]):.1e} ({worst["setup"]} {worst["mode"]} μ {worst["mu"]:g}): the contact delivers
 Coulomb's law in sum on every placement of the plane, and what the plain error shows at the
-threshold is the vibration, which the rigid block of the formula does not have. At this
+threshold is the vibration, which the rigid block of the formula does not have (CTest
+`test_friction_sum` asserts the sum within 1e-3 on a coarse grid-aligned case where the plain
+slope is off by more). At this
 resolution it is largest on the grid-aligned plane; the next table shows it on every placement. The {len(static)} static cases (tan θ ≤ μ: the law is an inequality) stay at the plain
 measure, within {max(abs(r["rel_error"]) for r in static):.1e} of g; they hide a steady slide on the grid-aligned planes (below).
 Not the fit (by hand, 02da9fd, float): a quadratic fit of the block's displacement (its velocity

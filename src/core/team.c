@@ -89,11 +89,18 @@ static pthread_once_t once = PTHREAD_ONCE_INIT;
 static pthread_key_t pool_key; /* the pool the calling thread owns (freed when it ends) */
 static int cores = 1; /* the cores this process may run on (its affinity mask) */
 
+/* Thread t reports core `me`: written only when it changed, so that in the usual case the slots'
+ * cache lines stay shared between the cores and a barrier moves no line for them. */
+static void note_core(sm_pool *p, int t, int me) {
+    if (t < SM_TEAM_CPU_SLOTS && atomic_load_explicit(&p->cpu[t], memory_order_relaxed) != me)
+        atomic_store_explicit(&p->cpu[t], me, memory_order_relaxed);
+}
+
 /* Records this thread's core; returns 1 when another thread of the latest run last reported the
  * same core (polling would hold the core that thread needs). */
 static int report_core(sm_pool *p) {
     const int me = sched_getcpu();
-    if (tl_t < SM_TEAM_CPU_SLOTS) atomic_store_explicit(&p->cpu[tl_t], me, memory_order_relaxed);
+    note_core(p, tl_t, me);
     if (me < 0) return 0;
     const unsigned T = atomic_load_explicit(&p->run_T, memory_order_relaxed);
     for (unsigned u = 0; u < T && u < SM_TEAM_CPU_SLOTS; u++)
@@ -137,7 +144,7 @@ void sm_team_barrier(void) {
     sm_pool *p = tl_run;
     /* The generation cannot advance before this thread arrives. */
     const uint64_t g = atomic_load_explicit(&p->barrier_gen, memory_order_acquire);
-    if (tl_t < SM_TEAM_CPU_SLOTS) atomic_store_explicit(&p->cpu[tl_t], sched_getcpu(), memory_order_relaxed);
+    note_core(p, tl_t, sched_getcpu());
     if (atomic_fetch_add_explicit(&p->arrived, 1, memory_order_acq_rel) == (unsigned)tl_T - 1) {
         atomic_store_explicit(&p->arrived, 0, memory_order_relaxed);
         publish(p, &p->barrier_gen, g + 1);
@@ -151,7 +158,7 @@ static void run_as(sm_pool *p, int t, int T) {
     tl_run = p;
     tl_T = T;
     tl_t = t;
-    if (t < SM_TEAM_CPU_SLOTS) atomic_store_explicit(&p->cpu[t], sched_getcpu(), memory_order_relaxed);
+    note_core(p, t, sched_getcpu());
     tl_depth++;
     p->fn(p->arg, t, T);
     sm_team_barrier();

@@ -63,6 +63,7 @@ static int fail(const char *what, sm_world *w) {
 
 /* The incline's set-ups, in the order of the table. */
 enum { INCLINE_TILTED, INCLINE_ALIGNED, INCLINE_SHIFTED, INCLINE_SETUPS };
+static const char *const setup_names[INCLINE_SETUPS] = {"tilted", "aligned", "shifted"};
 
 /* The contact gate of the incline runs (sm_world_def.contact_gap): `sm_validate incline_gate` runs the
  * same table with 0.35 cells. */
@@ -148,7 +149,6 @@ static double incline_run(int dim, double th_deg, double mu, int setup, sm_colli
 }
 
 static void incline(int quick) {
-    static const char *const names[INCLINE_SETUPS] = {"tilted", "aligned", "shifted"};
     printf("dim,setup,mode,theta,mu,max_dt,expected,measured,rel_error,normal_accel,rel_error_normal,normal_rms\n");
     /* theta, mu, mode (0 separate, 1 slip), max_dt; 3D: the first case, tilted only */
     const double cases[][4] = {{30, 0.2, 0, 2e-5}, {30, 0.0, 0, 2e-5}, {30, 0.5, 0, 2e-5}, {30, 0.7, 0, 2e-5},
@@ -168,7 +168,7 @@ static void incline(int quick) {
                 double an = 0, vr = 0, a = incline_run(dim, th, mu, setup, mode, dt, t0, t_end, extra, &an, &vr);
                 /* Coulomb's law with the block's own normal motion: N = M (g cos th + a_n), so a
                  * sliding block's acceleration is g (sin th - mu cos th) - mu a_n (sliding cases) */
-                printf("%d,%s,%s,%g,%g,%g,%.6f,%.6f,%.3g,%.6f,%.3g,%.3g\n", dim, names[setup],
+                printf("%d,%s,%s,%g,%g,%g,%.6f,%.6f,%.3g,%.6f,%.3g,%.3g\n", dim, setup_names[setup],
                        mode == SM_COLLIDE_SLIP ? "slip" : "separate", th, mu, dt, expect, a,
                        expect > 0 ? (a - expect) / expect : a / G, an,
                        expect > 0 ? (a - (expect - mu * an)) / expect : NAN, vr);
@@ -179,7 +179,6 @@ static void incline(int quick) {
 
 /* sm_validate incline_stiffness: the threshold cases against the block's stiffness. */
 static void incline_stiffness(int quick) {
-    static const char *const names[INCLINE_SETUPS] = {"tilted", "aligned", "shifted"};
     static const double youngs[] = {1e6, 3e6, 1e7, 3e7, 1e8}, mus[] = {0.5, 0.7};
     printf("dim,setup,mode,theta,mu,youngs,max_dt,expected,measured,rel_error,normal_accel,rel_error_normal,normal_rms\n");
     const double t0 = quick ? 0.05 : 0.5, t_end = quick ? 0.15 : 1.2, extra = quick ? 0 : 2.6, th = 30;
@@ -192,7 +191,7 @@ static void incline_stiffness(int quick) {
                 const double expect = tan(r) > mu ? G * (sin(r) - mu * cos(r)) : 0;
                 double an = 0, vr = 0;
                 const double a = incline_run(2, th, mu, setup, SM_COLLIDE_SEPARATE, 2e-5, t0, t_end, extra, &an, &vr);
-                printf("2,%s,separate,%g,%g,%g,2e-05,%.6f,%.6f,%.3g,%.6f,%.3g,%.3g\n", names[setup], th, mu, youngs[e],
+                printf("2,%s,separate,%g,%g,%g,2e-05,%.6f,%.6f,%.3g,%.6f,%.3g,%.3g\n", setup_names[setup], th, mu, youngs[e],
                        expect, a, expect > 0 ? (a - expect) / expect : a / G, an,
                        expect > 0 ? (a - (expect - mu * an)) / expect : NAN, vr);
                 fflush(stdout);
@@ -202,7 +201,6 @@ static void incline_stiffness(int quick) {
 
 /* sm_validate incline_resolution: the threshold case by resolution and transfer. */
 static void incline_resolution(int quick) {
-    static const char *const names[INCLINE_SETUPS] = {"tilted", "aligned", "shifted"};
     static const struct { double dx; sm_transfer tr; } runs[] = {
         {0.02, SM_TRANSFER_APIC}, {0.01, SM_TRANSFER_APIC}, {0.005, SM_TRANSFER_APIC}, {0.01, SM_TRANSFER_PIC}};
     printf("dim,setup,mode,theta,mu,dx,transfer,max_dt,expected,measured,rel_error,normal_accel,rel_error_normal,"
@@ -214,7 +212,7 @@ static void incline_resolution(int quick) {
             incline_dx2 = runs[i].dx, incline_transfer = runs[i].tr;
             double an = 0, vr = 0;
             const double a = incline_run(2, th, mu, setup, SM_COLLIDE_SEPARATE, 2e-5, t0, t_end, extra, &an, &vr);
-            printf("2,%s,separate,%g,%g,%g,%s,2e-05,%.6f,%.6f,%.3g,%.6f,%.3g,%.3g\n", names[setup], th, mu, runs[i].dx,
+            printf("2,%s,separate,%g,%g,%g,%s,2e-05,%.6f,%.6f,%.3g,%.6f,%.3g,%.3g\n", setup_names[setup], th, mu, runs[i].dx,
                    runs[i].tr == SM_TRANSFER_PIC ? "pic" : "apic", expect, a, (a - expect) / expect, an,
                    (a - (expect - mu * an)) / expect, vr);
             fflush(stdout);

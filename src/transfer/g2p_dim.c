@@ -12,10 +12,10 @@
  *
  * Per particle block: gather the 2^d grid blocks into the thread's cache (lanes 0..d-1:
  * v-tilde, or v-tilde - r v^n for FLIP; lanes d..2d-1: v-bar), then interpolate each particle
- * from it with the separable weights; in 2D two particles at a time (g2p_sums_pair: their 4 lanes
- * side by side in one vector, the same operations per lane, so the same bits). The threads claim blocks from the two ends of the list
- * (core/team.h, sm_team_claim): about the particles each had in P2G; every block's results are
- * its own, so which thread does it changes no bit. */
+ * from it with the separable weights; in 2D two particles at a time (g2p_sums_pair: their 4
+ * lanes side by side in one vector, the same operations per lane, so the same bits). The threads
+ * claim blocks from the two ends of the list (core/team.h, sm_team_claim): about the particles
+ * each had in P2G; every block's results are its own, so which thread does it changes no bit. */
 #include "core/dim.h"
 
 #include <string.h>
@@ -186,7 +186,6 @@ static inline __attribute__((always_inline)) void g2p_sums_pair(int S, const wch
     E_out[0][1] = pair_lo(E1), E_out[1][1] = pair_hi(E1);
 }
 #endif
-
 
 /* The step's constants G2P's update reads per particle, copied once per block into locals: read
  * through c, they were loaded again after every store (sm_real and double stores may alias them). */

@@ -1,12 +1,13 @@
-/* A step keeps the last particle binning when no particle has left its block (grid/bin_dim.c,
- * bins_still_hold), and that changes no bits:
+/* A step keeps the last particle binning when no particle has left its block, and brings it up to
+ * date by moving the particles that did (grid/rebin_dim.c), and that changes no bits:
  *  - 2D and 3D sand blocks seeded just above the ground, released under gravity (they drop a few
  *    millimetres, ring and settle: steps that keep the binning and steps that cannot), advanced on
  *    2 threads beside the same world whose binning is forgotten before every step (every step
  *    bins afresh): the same state hash after every 25 steps; the first kept the binning in some
- *    steps and the second in none;
+ *    steps and moved particles in others, the second did neither;
  *  - then, in both, ten particles moved by hand by a whole block (as a caller writing positions
- *    could): the binning is not kept for that step, and the hashes stay equal;
+ *    could): the binning is not kept for that step but brought up to date, and the hashes stay
+ *    equal;
  *  - particles added between steps (a different count) bin afresh, equal hashes again. */
 #include "test_util.h"
 #include "sandmpm/sandmpm.h"
@@ -57,18 +58,21 @@ static void run_case(int dim) {
     if (!keep || !fresh) return;
     const int steps = 300;
     CHECK(advance_pair(keep, fresh, steps));
-    const uint64_t kept = keep->bins.reuses;
-    printf("%dD, %zu particles: %d steps, the binning kept in %llu, afresh in every step of the other "
-           "(kept %llu); hashes %016llx / %016llx\n",
-           dim, keep->p.n, steps, (unsigned long long)kept, (unsigned long long)fresh->bins.reuses,
+    const uint64_t kept = keep->bins.reuses, moved = keep->bins.rebins;
+    printf("%dD, %zu particles: %d steps, the binning kept in %llu, brought up to date by moves in %llu, afresh in "
+           "every step of the other (kept %llu, moved %llu); hashes %016llx / %016llx\n",
+           dim, keep->p.n, steps, (unsigned long long)kept, (unsigned long long)moved,
+           (unsigned long long)fresh->bins.reuses, (unsigned long long)fresh->bins.rebins,
            (unsigned long long)sm_world_state_hash(keep), (unsigned long long)sm_world_state_hash(fresh));
     CHECK(kept > 0 && kept < (uint64_t)steps);
-    CHECK(fresh->bins.reuses == 0);
+    CHECK(moved > 0 && kept + moved <= (uint64_t)steps);
+    CHECK(fresh->bins.reuses == 0 && fresh->bins.rebins == 0);
 
     teleport(keep), teleport(fresh);
-    const uint64_t before = keep->bins.reuses;
+    const uint64_t before = keep->bins.reuses, moved_before = keep->bins.rebins;
     step(keep, 0), step(fresh, 1);
-    CHECK(keep->bins.reuses == before); /* ten particles in other blocks: binned afresh */
+    CHECK(keep->bins.reuses == before); /* ten particles in other blocks: not kept as it was */
+    CHECK(keep->bins.rebins == moved_before + 1); /* but brought up to date by moving them */
     CHECK(sm_world_state_hash(keep) == sm_world_state_hash(fresh));
     CHECK(advance_pair(keep, fresh, 50));
 

@@ -23,11 +23,14 @@ typedef struct sm_pblock {
     uint32_t start, end;    /* positions in perm */
     uint32_t ascending;     /* 1: perm[start..end) increases (storage order is id order here) */
     uint32_t gslot[8];
-    uint32_t more;          /* sm_bin_more only: the block's particles of the second batch, then its cursor */
+    uint32_t more;          /* sm_bin_more only: the block's particles of the second batch, then its cursor;
+                               while the binning by movers runs: the particles that left the block */
     uint32_t early;         /* 1: scattered by P2G before the second batch (dist/overlap.c); 0 after a full
-                               binning, and for the blocks a second batch adds */
+                               binning, and for the blocks a second batch adds; while the binning by movers
+                               runs: the particles that arrive */
     uint32_t side;          /* bit c: gslot[c] is a slot of the P2G's side arrays, not of the grid
-                               (sm_p2g_io.side; dist/overlap.c sets and clears it) */
+                               (sm_p2g_io.side; dist/overlap.c sets and clears it); while the binning by
+                               movers runs: the block's new start in perm */
 } sm_pblock;
 
 /* Particle blocks grouped by colour: blocks[offset[c] .. offset[c + 1]) are indices into sm_bins.pb of
@@ -43,6 +46,17 @@ typedef struct sm_bins_basis {
     size_t n, nactive;
     double pos_lo[3], pos_inv_dx;
 } sm_bins_basis;
+
+/* A particle that left its block (the binning by movers, rebin_dim.c). */
+typedef struct sm_bin_mover {
+    uint64_t key;   /* the block it reached */
+    uint32_t id, p; /* its id and its index in the storage */
+} sm_bin_mover;
+
+/* Bytes of the binning by movers' workspace per particle: room for the movers' records (16 bytes
+ * each) when a sixteenth of the particles moved, the most it takes on (tests/test_memory.c holds
+ * the whole world to 166 bytes per particle in 3D float). */
+#define SM_REBIN_WS_PER_PARTICLE 1
 
 /* The binning of one step, grown as needed, never shrunk. */
 typedef struct sm_bins {
@@ -61,8 +75,12 @@ typedef struct sm_bins {
     uint32_t *color_blocks; /* particle blocks grouped by colour */
     size_t color_cap;
     uint32_t color_count[8], color_offset[9];
+    void *rebin_ws;         /* the binning by movers' workspace (rebin_dim.c): SM_REBIN_WS_PER_PARTICLE bytes per
+                               particle of perm's capacity, in perm's allocation (after it) */
+    size_t rebin_ws_bytes;
     uint64_t reorders;      /* times the particle storage was reordered by block */
     uint64_t reuses;        /* binnings that kept the last one (every particle still in its block) */
+    uint64_t rebins;        /* binnings made by moving the particles that left their blocks (rebin_dim.c) */
     sm_bins_basis basis;    /* what the last full binning was made of (valid 0: none yet) */
     int keep_storage;       /* never reorder the storage (a distributed world's storage holds its
                                particles, then ghosts: dist/exchange.c reorders its particles) */

@@ -17,9 +17,10 @@
  *   5. colour_lists: particle blocks grouped by colour for the race-free scatter;
  *   6. reorder_if_scattered: move the particle storage into block order when a block's
  *      particles are no longer mostly contiguous (every later pass then streams).
- * Before all of these, bins_still_hold: when no particle has left its block since the last
- * binning (a pile at rest, a slow scene), steps 1-6 would give it again, and only the grid is
- * zeroed.
+ * Before all of these, when the last binning was made for the same particle count, kernel, domain
+ * and grid: the binning by movers (rebin_dim.c), which makes steps 1-3's result from the last
+ * binning by moving only the particles that left their blocks. When none did (a pile at rest, a
+ * slow scene), steps 4-6 would give the last binning again, and only the grid is zeroed.
  *
  * A second batch (sm_bin_more, for a distributed step whose P2G starts before the arrivals):
  * the new particles counted per block (new blocks appended, then sorted and merged in), each
@@ -32,14 +33,8 @@
 #include <string.h>
 
 #include "core/team.h"
-#include "grid/bin.h"
-#include "transfer/kernel.h"
+#include "grid/bin_dim.h"
 
-static inline uint64_t particle_key(const sm_step_ctx *c, const double *xp, int S) {
-    int bb[3] = {0, 0, 0};
-    for (int a = 0; a < D; a++) bb[a] = sm_kernel_base(S, (xp[a] - c->pos_lo[a]) * c->pos_inv_dx) >> SM_BLOCK_BITS;
-    return sm_block_key(bb[0], bb[1], bb[2]);
-}
 
 static inline int key_color(uint64_t key) {
     int b[3];
@@ -50,17 +45,6 @@ static inline int key_color(uint64_t key) {
 static int cmp_u64(const void *a, const void *b) {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
     return (x > y) - (x < y);
-}
-
-static sm_status grow(void **ptr, size_t *cap, size_t need, size_t elem) {
-    if (need <= *cap) return SM_OK;
-    size_t c = *cap ? *cap : 64;
-    while (c < need) c += c / 2;
-    void *q = sm_realloc(*ptr, c * elem);
-    if (!q) return SM_ERR_NOMEM;
-    *ptr = q;
-    *cap = c;
-    return SM_OK;
 }
 
 /* Thread t's share of the n particles: [p0, p1). */
@@ -93,7 +77,7 @@ static void count_shares(void *arg, long lo, long hi) {
         uint64_t last = UINT64_MAX;
         uint32_t slot = SM_NO_SLOT;
         for (size_t p = p0; p < p1; p++) {
-            uint64_t k = particle_key(c, job->x + p * D, c->stencil);
+            uint64_t k = sm_bin_particle_key(c, job->x + p * D, c->stencil);
             if (k != last) {
                 last = k;
                 slot = sm_block_hash_find(&b->pb_hash, k);
@@ -110,7 +94,7 @@ static void count_shares(void *arg, long lo, long hi) {
 static sm_status count_known_blocks(sm_bins *b, const double *x, size_t n, const sm_step_ctx *c, int T,
                                     long *misses_out) {
     const size_t nb = b->npb;
-    if (grow((void **)&b->counts, &b->counts_cap, (size_t)T * nb + 1, sizeof(uint32_t)) != SM_OK) return SM_ERR_NOMEM;
+    if (sm_bin_grow((void **)&b->counts, &b->counts_cap, (size_t)T * nb + 1, sizeof(uint32_t)) != SM_OK) return SM_ERR_NOMEM;
     uint32_t *cnt = b->counts;
     memset(cnt, 0, (size_t)T * nb * sizeof(uint32_t));
     count_job job = {b, x, n, c, T, 0};
@@ -125,11 +109,11 @@ static sm_status add_new_blocks(sm_bins *b, const double *x, size_t n, const sm_
     size_t nb = b->npb;
     uint64_t last = UINT64_MAX;
     for (size_t p = 0; p < n; p++) {
-        uint64_t k = particle_key(c, x + p * D, c->stencil);
+        uint64_t k = sm_bin_particle_key(c, x + p * D, c->stencil);
         if (k == last) continue;
         last = k;
         if (sm_block_hash_find(ph, k) != SM_NO_SLOT) continue;
-        if (grow((void **)&b->pb, &b->pb_cap, nb + 1, sizeof *b->pb) != SM_OK) return SM_ERR_NOMEM;
+        if (sm_bin_grow((void **)&b->pb, &b->pb_cap, nb + 1, sizeof *b->pb) != SM_OK) return SM_ERR_NOMEM;
         if (ph->cap < 2 * (nb + 1)) {
             if (sm_block_hash_reserve(ph, nb + 1) != SM_OK) return SM_ERR_NOMEM;
             for (size_t q = 0; q < nb; q++) sm_block_hash_put(ph, b->pb[q].key, (uint32_t)q);
@@ -184,7 +168,7 @@ static void scatter_shares(void *arg, long lo, long hi) {
         uint64_t last = UINT64_MAX;
         uint32_t slot = 0;
         for (size_t p = p0; p < p1; p++) {
-            uint64_t k = particle_key(c, job->x + p * D, c->stencil);
+            uint64_t k = sm_bin_particle_key(c, job->x + p * D, c->stencil);
             if (k != last) {
                 last = k;
                 slot = sm_block_hash_find(&b->pb_hash, k);
@@ -309,7 +293,7 @@ static void link_grid_slots(sm_bins *b, const sm_grid *g) {
 /* 5. The particle blocks grouped by colour (ascending key within a colour). */
 static sm_status colour_lists(sm_bins *b) {
     const size_t nne = b->npb;
-    if (grow((void **)&b->color_blocks, &b->color_cap, nne, sizeof(uint32_t)) != SM_OK) return SM_ERR_NOMEM;
+    if (sm_bin_grow((void **)&b->color_blocks, &b->color_cap, nne, sizeof(uint32_t)) != SM_OK) return SM_ERR_NOMEM;
     memset(b->color_count, 0, sizeof b->color_count);
     for (size_t r = 0; r < nne; r++) b->color_count[key_color(b->pb[r].key)]++;
     b->color_offset[0] = 0;
@@ -350,52 +334,6 @@ static int same_basis(const sm_bins_basis *a, const sm_bins_basis *o) {
     return same;
 }
 
-/* 1 if particle blocks r0..r1-1 still hold: each stretch of perm has its block's particles,
- * in strictly ascending id (and then its `ascending` flag as order_by_id would set it). Stops at
- * the first that does not. */
-static int blocks_hold(sm_bins *b, const sm_particles *P, const sm_step_ctx *c, size_t r0, size_t r1) {
-    const uint32_t *perm = b->perm, *id = P->id;
-    for (size_t r = r0; r < r1; r++) {
-        const uint32_t s = b->pb[r].start, e = b->pb[r].end;
-        uint32_t increasing = 1;
-        for (uint32_t j = s; j < e; j++) {
-            const uint32_t p = perm[j];
-            if (particle_key(c, P->x + (size_t)p * D, c->stencil) != b->pb[r].key) return 0;
-            if (j > s && id[p] <= id[perm[j - 1]]) return 0;
-            increasing &= j == s || p > perm[j - 1];
-        }
-        b->pb[r].ascending = increasing;
-    }
-    return 1;
-}
-
-typedef struct hold_job {
-    sm_bins *b;
-    const sm_particles *P;
-    const sm_step_ctx *c;
-    atomic_int held;
-} hold_job;
-
-static void blocks_hold_range(void *arg, long lo, long hi) {
-    hold_job *job = arg;
-    if (!blocks_hold(job->b, job->P, job->c, (size_t)lo, (size_t)hi)) atomic_store_explicit(&job->held, 0, memory_order_relaxed);
-}
-
-/* 0. The last binning holds again when it was made for the same particle count, kernel, domain and
- * grid, and every one of its blocks holds (blocks_hold): perm is a permutation of the n
- * particles, so each particle is in its own block's stretch, sorted by id, and the non-empty
- * blocks are the same. A full binning is a function of each block's set of particles (the
- * counting sort is then put in id order; grid blocks, slots and colours follow from the block
- * keys; the storage reorder from perm, whose last decision stands), so it would give the same. */
-static int bins_still_hold(sm_bins *b, const sm_particles *P, const sm_grid *g, const sm_step_ctx *c, int T) {
-    const sm_bins_basis now = basis_of(P, g, c);
-    if (!b->basis.valid || !same_basis(&now, &b->basis)) return 0;
-    if (b->npb == 0 || b->pb[0].start != 0 || b->pb[b->npb - 1].end != P->n) return 0;
-    hold_job job = {b, P, c, 1};
-    sm_team_for(T, (long)b->npb, blocks_hold_range, &job);
-    return atomic_load(&job.held);
-}
-
 /* ---- A second batch -------------------------------------------------------------------- */
 
 /* Counts particles [first, n) into their blocks' `more`, appending the blocks not known yet
@@ -406,14 +344,14 @@ static sm_status count_more(sm_bins *b, const sm_particles *P, size_t first, con
     uint64_t last = UINT64_MAX;
     uint32_t slot = SM_NO_SLOT;
     for (size_t p = first; p < P->n; p++) {
-        const uint64_t k = particle_key(c, P->x + p * D, c->stencil);
+        const uint64_t k = sm_bin_particle_key(c, P->x + p * D, c->stencil);
         if (k != last) {
             last = k;
             slot = sm_block_hash_find(ph, k);
         }
         if (slot == SM_NO_SLOT) {
             const size_t nb = b->npb;
-            if (grow((void **)&b->pb, &b->pb_cap, nb + 1, sizeof *b->pb) != SM_OK) return SM_ERR_NOMEM;
+            if (sm_bin_grow((void **)&b->pb, &b->pb_cap, nb + 1, sizeof *b->pb) != SM_OK) return SM_ERR_NOMEM;
             if (ph->cap < 2 * (nb + 1)) {
                 if (sm_block_hash_reserve(ph, nb + 1) != SM_OK) return SM_ERR_NOMEM;
                 for (size_t q = 0; q < nb; q++) sm_block_hash_put(ph, b->pb[q].key, (uint32_t)q);
@@ -484,7 +422,7 @@ static void scatter_more(sm_bins *b, const sm_particles *P, size_t first, const 
     uint64_t last = UINT64_MAX;
     uint32_t slot = 0;
     for (size_t p = first; p < P->n; p++) {
-        const uint64_t k = particle_key(c, P->x + p * D, c->stencil);
+        const uint64_t k = sm_bin_particle_key(c, P->x + p * D, c->stencil);
         if (k != last) {
             last = k;
             slot = sm_block_hash_find(&b->pb_hash, k);
@@ -498,7 +436,7 @@ static void scatter_more(sm_bins *b, const sm_particles *P, size_t first, const 
 /* The grid blocks that the blocks new to the binning touch and that are not live yet: merged into
  * the live ones. */
 static sm_status grow_grid(sm_bins *b, sm_grid *g, size_t touched) {
-    if (grow((void **)&b->pairs, &b->pairs_cap, (size_t)NGB * touched + 2, sizeof(uint64_t)) != SM_OK) return SM_ERR_NOMEM;
+    if (sm_bin_grow((void **)&b->pairs, &b->pairs_cap, (size_t)NGB * touched + 2, sizeof(uint64_t)) != SM_OK) return SM_ERR_NOMEM;
     size_t k = 0;
     for (size_t t = 0; t < touched; t++) {
         if (!(b->counts[t] >> 31)) continue;
@@ -520,8 +458,8 @@ sm_status SM_FN(sm_bin_more)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_s
     const int T = c->threads > 0 ? c->threads : 1;
     const size_t old = b->npb;
     if (count_more(b, P, first, c) != SM_OK ||
-        grow((void **)&b->pb_tmp, &b->pb_tmp_cap, b->npb - old + 1, sizeof *b->pb_tmp) != SM_OK ||
-        grow((void **)&b->counts, &b->counts_cap, b->npb + 1, sizeof(uint32_t)) != SM_OK)
+        sm_bin_grow((void **)&b->pb_tmp, &b->pb_tmp_cap, b->npb - old + 1, sizeof *b->pb_tmp) != SM_OK ||
+        sm_bin_grow((void **)&b->counts, &b->counts_cap, b->npb + 1, sizeof(uint32_t)) != SM_OK)
         return SM_ERR_NOMEM;
     const size_t touched = make_room(b, old);
     scatter_more(b, P, first, c, touched, T);
@@ -534,28 +472,8 @@ sm_status SM_FN(sm_bin_more)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_s
 
 /* ---- The binning ------------------------------------------------------------------------ */
 
-sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c) {
-    const size_t n = P->n;
-    const int T = c->threads > 0 ? c->threads : 1;
-    long misses = 0;
-    if (bins_still_hold(b, P, g, c, T)) {
-        sm_grid_zero(g, T);
-        reorder_if_scattered(b, P);
-        b->reuses++;
-        return SM_OK;
-    }
-    b->basis.valid = 0;
-    if (count_known_blocks(b, P->x, n, c, T, &misses) != SM_OK) return SM_ERR_NOMEM;
-    if (misses > 0) {
-        if (add_new_blocks(b, P->x, n, c) != SM_OK) return SM_ERR_NOMEM;
-        if (count_known_blocks(b, P->x, n, c, T, &misses) != SM_OK) return SM_ERR_NOMEM;
-        SM_ASSERT(misses == 0);
-    }
-    if (grow((void **)&b->pairs, &b->pairs_cap, 2 * b->npb + 2, sizeof(uint64_t)) != SM_OK) return SM_ERR_NOMEM;
-    const size_t nne = sort_blocks(b, T);
-    scatter_particles(b, P->x, n, c, T);
-    publish_blocks(b, nne, T);
-    order_by_id(b, P->id, T);
+/* 4.-6. after the particle blocks (of the full binning or the binning by movers). */
+static sm_status bin_finish(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c, int T) {
     if (live_grid_blocks(b, g) != SM_OK) return SM_ERR_NOMEM;
     link_grid_slots(b, g);
     sm_grid_zero(g, T);
@@ -563,4 +481,33 @@ sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const
     reorder_if_scattered(b, P);
     b->basis = basis_of(P, g, c);
     return SM_OK;
+}
+
+sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const sm_step_ctx *c) {
+    const size_t n = P->n;
+    const int T = c->threads > 0 ? c->threads : 1;
+    long misses = 0;
+    const sm_bins_basis now = basis_of(P, g, c);
+    sm_rebin_outcome rebin = SM_REBIN_FULL;
+    if (b->basis.valid && same_basis(&now, &b->basis) && SM_FN(sm_rebin)(b, P, c, T, &rebin) != SM_OK) return SM_ERR_NOMEM;
+    if (rebin == SM_REBIN_HELD) {
+        sm_grid_zero(g, T);
+        reorder_if_scattered(b, P);
+        b->reuses++;
+        return SM_OK;
+    }
+    b->basis.valid = 0;
+    if (rebin == SM_REBIN_MOVED) return bin_finish(b, P, g, c, T);
+    if (count_known_blocks(b, P->x, n, c, T, &misses) != SM_OK) return SM_ERR_NOMEM;
+    if (misses > 0) {
+        if (add_new_blocks(b, P->x, n, c) != SM_OK) return SM_ERR_NOMEM;
+        if (count_known_blocks(b, P->x, n, c, T, &misses) != SM_OK) return SM_ERR_NOMEM;
+        SM_ASSERT(misses == 0);
+    }
+    if (sm_bin_grow((void **)&b->pairs, &b->pairs_cap, 2 * b->npb + 2, sizeof(uint64_t)) != SM_OK) return SM_ERR_NOMEM;
+    const size_t nne = sort_blocks(b, T);
+    scatter_particles(b, P->x, n, c, T);
+    publish_blocks(b, nne, T);
+    order_by_id(b, P->id, T);
+    return bin_finish(b, P, g, c, T);
 }

@@ -76,9 +76,13 @@ static sm_world *blocks(int dim, sm_integrator integ, int sand, double max_dt, i
 /* The block-Jacobi preconditioner: a sand block (E = 1e6) landed on a sticky ground, stepped at
  * 5e-3 s (about 15x its explicit limit) with and without it from the same state. The first
  * step's particle velocities agree to the Newton tolerance (both solves meet it). In 3D block
- * Jacobi must save GMRES iterations over the ten steps (at least 5%: measured 9% in double, 17% in
- * float); in 2D it costs some here (15% more, docs/benchmarks.md), so the 2D counts are printed
- * only, and it is off by default. */
+ * Jacobi must save GMRES iterations per Newton iteration over the ten steps (at least 5%:
+ * measured 8.8% in double, 7.1% in float). Per Newton iteration, because the preconditioner acts
+ * on each linear solve, while how many Newton iterations the ten steps take turns on rounding
+ * near the tolerance: in float 90 without and 86 with it before 3D G2P summed by rows, 86 and 90
+ * after, so the total saving moved from 11% to 3% while the saving per solve stayed at 7%. In 2D it
+ * costs some here (15% more, docs/benchmarks.md), so the 2D counts are printed only, and it is
+ * off by default. */
 static void preconditioner(int dim) {
     youngs = 1e6;
     sm_world *w[2];
@@ -122,7 +126,7 @@ static void preconditioner(int dim) {
            dim, vdiff, w[0]->def.newton_tolerance * dt, (unsigned long long)newton[0], (unsigned long long)gmres[0],
            (unsigned long long)newton[1], (unsigned long long)gmres[1]);
     CHECK(vdiff < 10 * w[0]->def.newton_tolerance * dt);
-    if (dim == 3) CHECK(gmres[1] <= 0.95 * (double)gmres[0]);
+    if (dim == 3) CHECK((double)gmres[1] / (double)newton[1] <= 0.95 * (double)gmres[0] / (double)newton[0]);
     printf("%dD implicit steps 2-10, with and without the preconditioner: %llu heap allocations\n", dim,
            (unsigned long long)allocs);
     CHECK(allocs == 0); /* no allocation per step or per Newton iteration once the workspaces fit */

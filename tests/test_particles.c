@@ -5,7 +5,8 @@
  *  - reserve keeps the contents; new particles start at rest (F = I, everything else 0);
  *  - pack then unpack copies every byte of every field (to another index, through a buffer);
  *  - permute moves particle perm[j] to j for a random permutation (every field), perm becomes the
- *    identity;
+ *    identity; so does the reorder on two threads (permute_pair), which refuses too small a
+ *    scratch;
  *  - the state hash sees the hashed fields and only those. */
 #include <string.h>
 
@@ -143,7 +144,9 @@ static void test_pack(int d) {
     sm_particles_free(&p);
 }
 
-static void test_permute(int d) {
+/* pair: sm_particles_permute_pair (two threads, half of the fields each) instead of the serial
+ * reorder; the same result. */
+static void test_permute(int d, int pair) {
     enum { N = 1000 };
     sm_particles p, q;
     memset(&p, 0, sizeof p);
@@ -162,7 +165,14 @@ static void test_permute(int d) {
         perm[j] = t;
     }
     memcpy(want, perm, sizeof perm);
-    sm_particles_permute(&p, d, perm);
+    if (pair) {
+        uint64_t seen[2 * ((N + 63) / 64)];
+        CHECK(!sm_particles_permute_pair(&p, d, perm, seen, sizeof seen - 8)); /* too small: nothing done */
+        CHECK(memcmp(perm, want, sizeof perm) == 0);
+        CHECK(sm_particles_permute_pair(&p, d, perm, seen, sizeof seen));
+    } else {
+        sm_particles_permute(&p, d, perm);
+    }
     int moved = 1, ident = 1;
     for (uint32_t j = 0; j < N; j++) {
         moved &= same_particle(&p, j, &q, want[j], d);
@@ -200,7 +210,8 @@ int main(void) {
         test_table(d);
         test_rest_and_reserve(d);
         test_pack(d);
-        test_permute(d);
+        test_permute(d, 0);
+        test_permute(d, 1);
         test_hash(d);
     }
     return sm_test_summary("test_particles");

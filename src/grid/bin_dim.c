@@ -338,14 +338,16 @@ static sm_status colour_lists(sm_bins *b) {
 }
 
 /* 6. Reorders the storage when the particles of a block are no longer mostly contiguous (fewer
- * than 16 in a row on average); perm becomes the identity. */
-static void reorder_if_scattered(sm_bins *b, sm_particles *P) {
+ * than 16 in a row on average); perm becomes the identity. On two threads or more, two threads
+ * move half of the fields each (particles/permute.c; the binning by movers' workspace is free by
+ * now and holds their bitmaps). */
+static void reorder_if_scattered(sm_bins *b, sm_particles *P, int T) {
     const size_t n = P->n;
     if (b->keep_storage) return;
     size_t breaks = 0;
     for (size_t i = 1; i < n; i++) breaks += b->perm[i] != b->perm[i - 1] + 1;
     if (breaks * 16 > n) {
-        sm_particles_permute(P, D, b->perm);
+        if (T < 2 || !sm_particles_permute_pair(P, D, b->perm, b->rebin_ws, b->rebin_ws_bytes)) sm_particles_permute(P, D, b->perm);
         b->reorders++;
     }
 }
@@ -510,7 +512,7 @@ static sm_status bin_finish(sm_bins *b, sm_particles *P, sm_grid *g, const sm_st
     if (live_grid_blocks(b, g) != SM_OK) return SM_ERR_NOMEM;
     sm_grid_zero(g, T);
     if (colour_lists(b) != SM_OK) return SM_ERR_NOMEM;
-    reorder_if_scattered(b, P);
+    reorder_if_scattered(b, P, T);
     b->basis = basis_of(P, g, c);
     return SM_OK;
 }
@@ -524,7 +526,7 @@ sm_status SM_FN(sm_bin_particles)(sm_bins *b, sm_particles *P, sm_grid *g, const
     if (b->basis.valid && same_basis(&now, &b->basis) && SM_FN(sm_rebin)(b, P, c, T, &rebin) != SM_OK) return SM_ERR_NOMEM;
     if (rebin == SM_REBIN_HELD) {
         sm_grid_zero(g, T);
-        reorder_if_scattered(b, P);
+        reorder_if_scattered(b, P, T);
         b->reuses++;
         return SM_OK;
     }

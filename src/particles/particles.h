@@ -103,6 +103,11 @@ void sm_particles_unpack_p2g(sm_particles *p, int dim, size_t i, const void *buf
  * cycles; the top bit of perm's entries is used as a mark), then sets perm to the identity. */
 void sm_particles_permute(sm_particles *p, int dim, uint32_t *perm);
 
+/* The same on two threads (particles/permute.c), each moving half of the fields, with the same
+ * result; scratch: at least 2 * ceil(n / 64) 8-byte-aligned words. Returns 0 (and does nothing)
+ * when scratch is too small. */
+int sm_particles_permute_pair(sm_particles *p, int dim, uint32_t *perm, void *scratch, size_t scratch_bytes);
+
 /* Copies every field of particle src to position dst (both < cap). */
 void sm_particles_move(sm_particles *p, int dim, size_t dst, size_t src);
 

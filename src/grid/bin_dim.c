@@ -35,7 +35,6 @@
 #include "core/team.h"
 #include "grid/bin_dim.h"
 
-
 static inline int key_color(uint64_t key) {
     int b[3];
     sm_block_coords(key, b);
@@ -298,9 +297,9 @@ static size_t merge_live_keys(sm_bins *b, const sm_grid *g, uint64_t *out) {
 
 /* 4. The live grid blocks: the 2^d neighbours (+0/+1 per axis) of every particle block, in
  * ascending key order (slot order), the grid's hash of them and every particle block's slots.
- * (Merged from the particle blocks' order: 2D, 1e6 particles, the binning 2.2e8 -> 2.7e8
- * particles/s against a hash of them sorted by qsort and looked up again per particle block;
- * docs/benchmarks.md.) */
+ * (Merged from the particle blocks' order: 2D, 1e6 particles on 2 threads, the binning
+ * 1.9-2.1e8 -> 2.8-3.0e8 particles/s against a hash of them sorted by qsort and looked up again
+ * per particle block; docs/benchmarks.md.) */
 static sm_status live_grid_blocks(sm_bins *b, sm_grid *g) {
     const size_t ng = merge_live_keys(b, g, NULL);
     if (sm_grid_reserve(g, ng) != SM_OK) return SM_ERR_NOMEM;

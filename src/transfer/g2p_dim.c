@@ -96,7 +96,7 @@ static inline __attribute__((always_inline)) void g2p_sums(int S, const wchunk *
      * node was weighted by w1 w2, K1 w2 and w1 K2 formed in advance, but without forming those
      * 18 vectors and 9 products per particle (they did not fit the registers): 3D float G2P 1.6e7
      * -> 1.82e7 particles/s on one thread, 3.2e7 -> 3.64e7 on two at 1e6 (docs/benchmarks.md,
-     * "3D G2P summed by rows"). */
+     * "... 3D G2P by rows ..."). It changed the rounding of the 3D sums (beb7114). */
     for (int s0 = 0; s0 < S; s0++) {
         vec t = {0}, ty = {0}, tz = {0};
         for (int s1 = 0; s1 < S; s1++) {

@@ -6,11 +6,8 @@
  * while the new ones are zero. 2D and 3D, quadratic and cubic kernels, a collapsing block after
  * some steps; storage in block order (the first batch is whole blocks and one partial one) and
  * shuffled (most blocks get particles from both batches); several split points. */
-#include "test_util.h"
 #include "sandmpm/sandmpm.h"
-#include "world/world.h"
-
-#include <string.h>
+#include "test_binning.h"
 
 static sm_world *build(int dim, sm_kernel kernel) {
     sm_world_def def = sm_world_def_default();
@@ -25,53 +22,8 @@ static sm_world *build(int dim, sm_kernel kernel) {
     return w;
 }
 
-/* The binner's view of the step context. */
-static sm_step_ctx ctx_of(const sm_world *w) {
-    sm_step_ctx c;
-    memset(&c, 0, sizeof c);
-    c.pos_dx = w->def.dx;
-    c.pos_inv_dx = w->inv_dx;
-    for (int a = 0; a < 3; a++) c.pos_lo[a] = w->def.domain_min[a];
-    c.stencil = w->def.kernel == SM_KERNEL_CUBIC ? 4 : 3;
-    c.threads = 2;
-    return c;
-}
-
-typedef struct binning {
-    sm_bins b;
-    sm_grid g;
-} binning;
-
-static void binning_init(binning *x, const sm_world *w) {
-    memset(&x->b, 0, sizeof x->b);
-    x->b.keep_storage = 1;
-    CHECK(sm_bins_reserve_perm(&x->b, w->p.n) == SM_OK);
-    sm_grid_init(&x->g, w->dim, w->grid.nodes, 0);
-}
-
-static void binning_free(binning *x) {
-    sm_bins_free(&x->b);
-    sm_grid_free(&x->g);
-}
-
 /* A value for node l of the grid block with key k (what P2G had added there). */
 static sm_real mark(uint64_t k, size_t l) { return (sm_real)((double)(k % 9973) + 0.001 * (double)l + 1.0); }
-
-/* 1 if the two binnings are equal, field by field. */
-static int same_binning(const binning *x, const binning *y, int dim) {
-    const sm_bins *a = &x->b, *b = &y->b;
-    int same = a->npb == b->npb && x->g.nactive == y->g.nactive;
-    for (size_t r = 0; same && r < a->npb; r++) {
-        const sm_pblock *p = &a->pb[r], *q = &b->pb[r];
-        same &= p->key == q->key && p->start == q->start && p->end == q->end && p->ascending == q->ascending;
-        same &= memcmp(p->gslot, q->gslot, sizeof p->gslot) == 0;
-        same &= memcmp(a->perm + p->start, b->perm + p->start, (p->end - p->start) * sizeof *a->perm) == 0;
-    }
-    for (int c = 0; same && c <= (1 << dim); c++) same &= a->color_offset[c] == b->color_offset[c];
-    if (same) same &= memcmp(a->color_blocks, b->color_blocks, a->npb * sizeof *a->color_blocks) == 0;
-    if (same) same &= memcmp(x->g.key, y->g.key, x->g.nactive * sizeof *x->g.key) == 0;
-    return same;
-}
 
 /* Bins [0, first) into y, marks its live grid blocks' masses and momenta, adds [first, n); then y
  * against the one binning x of all n. Returns 1 if everything matched. */
@@ -109,22 +61,6 @@ static int check_split(sm_world *w, const binning *x, size_t first, size_t *kept
     *kept_blocks = kept;
     binning_free(&y);
     return ok;
-}
-
-static void shuffle(sm_world *w) {
-    const size_t n = w->p.n;
-    uint32_t *perm = malloc(n * sizeof *perm);
-    for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
-    uint64_t s = 12345;
-    for (size_t i = n; i-- > 1;) {
-        s = s * 6364136223846793005ULL + 1442695040888963407ULL;
-        const size_t j = (size_t)(s >> 33) % (i + 1);
-        const uint32_t t = perm[i];
-        perm[i] = perm[j];
-        perm[j] = t;
-    }
-    sm_particles_permute(&w->p, w->dim, perm);
-    free(perm);
 }
 
 static void run_case(int dim, sm_kernel kernel) {

@@ -10,11 +10,8 @@
  *  - storage shuffled: the kept binning's stretches are out of id order, so the full binning runs,
  *    and the result is again the fresh one.
  * It also checks that the kept binning did use the moves (counted in sm_bins.rebins). */
-#include "test_util.h"
 #include "sandmpm/sandmpm.h"
-#include "world/world.h"
-
-#include <string.h>
+#include "test_binning.h"
 
 static sm_world *build(int dim, sm_kernel kernel) {
     sm_world_def def = sm_world_def_default();
@@ -26,50 +23,13 @@ static sm_world *build(int dim, sm_kernel kernel) {
     return sm_test_sand_box(&def, 0.1, c, h);
 }
 
-/* The binner's view of the step context. */
-static sm_step_ctx ctx_of(const sm_world *w) {
-    sm_step_ctx c;
-    memset(&c, 0, sizeof c);
-    c.pos_dx = w->def.dx;
-    c.pos_inv_dx = w->inv_dx;
-    for (int a = 0; a < 3; a++) c.pos_lo[a] = w->def.domain_min[a];
-    c.stencil = w->def.kernel == SM_KERNEL_CUBIC ? 4 : 3;
-    c.threads = 2;
-    return c;
-}
-
-typedef struct binning {
-    sm_bins b;
-    sm_grid g;
-} binning;
-
-/* A binning that never reorders the world's storage. */
-static void binning_init(binning *x, const sm_world *w) {
-    memset(&x->b, 0, sizeof x->b);
-    x->b.keep_storage = 1;
-    CHECK(sm_bins_reserve_perm(&x->b, w->p.n) == SM_OK);
-    sm_grid_init(&x->g, w->dim, w->grid.nodes, 0);
-}
-
-static void binning_free(binning *x) {
-    sm_bins_free(&x->b);
-    sm_grid_free(&x->g);
-}
-
-/* 1 if the two binnings are equal, field by field. */
-static int same_binning(const binning *x, const binning *y, int dim) {
+/* same_binning, and the blocks' more, early and side (0 after either binning) and both hashes
+ * (every live grid block and particle block found at its index). */
+static int same_kept_binning(const binning *x, const binning *y, int dim) {
     const sm_bins *a = &x->b, *b = &y->b;
-    int same = a->npb == b->npb && x->g.nactive == y->g.nactive;
-    for (size_t r = 0; same && r < a->npb; r++) {
-        const sm_pblock *p = &a->pb[r], *q = &b->pb[r];
-        same &= p->key == q->key && p->start == q->start && p->end == q->end && p->ascending == q->ascending;
-        same &= p->more == q->more && p->early == q->early && p->side == q->side;
-        same &= memcmp(p->gslot, q->gslot, sizeof p->gslot) == 0;
-        same &= memcmp(a->perm + p->start, b->perm + p->start, (p->end - p->start) * sizeof *a->perm) == 0;
-    }
-    for (int c = 0; same && c <= (1 << dim); c++) same &= a->color_offset[c] == b->color_offset[c];
-    if (same) same &= memcmp(a->color_blocks, b->color_blocks, a->npb * sizeof *a->color_blocks) == 0;
-    if (same) same &= memcmp(x->g.key, y->g.key, x->g.nactive * sizeof *x->g.key) == 0;
+    int same = same_binning(x, y, dim);
+    for (size_t r = 0; same && r < a->npb; r++)
+        same &= a->pb[r].more == b->pb[r].more && a->pb[r].early == b->pb[r].early && a->pb[r].side == b->pb[r].side;
     for (size_t s = 0; same && s < y->g.nactive; s++) same &= sm_block_hash_find(&y->g.hash, y->g.key[s]) == (uint32_t)s;
     for (size_t r = 0; same && r < b->npb; r++) same &= sm_block_hash_find(&b->pb_hash, b->pb[r].key) == (uint32_t)r;
     return same;
@@ -83,7 +43,7 @@ static int kept_is_fresh(sm_world *w, binning *kept) {
     int ok = w->stages->bin(&fresh.b, &w->p, &fresh.g, &c) == SM_OK;
     ok &= w->stages->bin(&kept->b, &w->p, &kept->g, &c) == SM_OK;
     ok &= fresh.b.rebins == 0 && fresh.b.reuses == 0;
-    ok &= same_binning(&fresh, kept, w->dim);
+    ok &= same_kept_binning(&fresh, kept, w->dim);
     binning_free(&fresh);
     return ok;
 }
@@ -103,22 +63,6 @@ static size_t block_to_move(const binning *kept, size_t n) {
         if (len <= n / 20 && len > best_len) best = r, best_len = len;
     }
     return best;
-}
-
-static void shuffle(sm_world *w) {
-    const size_t n = w->p.n;
-    uint32_t *perm = malloc(n * sizeof *perm);
-    for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
-    uint64_t s = 12345;
-    for (size_t i = n; i-- > 1;) {
-        s = s * 6364136223846793005ULL + 1442695040888963407ULL;
-        const size_t j = (size_t)(s >> 33) % (i + 1);
-        const uint32_t t = perm[i];
-        perm[i] = perm[j];
-        perm[j] = t;
-    }
-    sm_particles_permute(&w->p, w->dim, perm);
-    free(perm);
 }
 
 static int total_grew, total_shrank; /* over all cases: the moves did add and drop blocks */

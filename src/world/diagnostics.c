@@ -84,12 +84,11 @@ static void particle_energies(void *arg, long lo, long hi) {
 
 static double elastic_energy(const sm_world *w) {
     const size_t n = w->p.n;
-    const int threads = w->governed ? sm_governor_threads(&w->gov) : w->threads;
     double e = 0, chunk[ENERGY_CHUNK];
     for (size_t first = 0; first < n; first += ENERGY_CHUNK) {
         const size_t cnt = n - first < ENERGY_CHUNK ? n - first : ENERGY_CHUNK;
         energy_job job = {w, first, chunk};
-        sm_team_for(threads, (long)cnt, particle_energies, &job);
+        sm_team_for(w->threads, (long)cnt, particle_energies, &job); /* the last step's threads */
         for (size_t k = 0; k < cnt; k++) e += chunk[k];
     }
     return e;
